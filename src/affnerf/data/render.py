@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
-from trimesh.ray.ray_pyembree import RayMeshIntersector
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
 
 from affnerf.data.cameras import Intrinsics, world_rays
 from affnerf.objects.asset import Material, SurfaceMesh
@@ -163,34 +163,49 @@ class Renderer:
         self.surface = surface
         self.background = np.asarray(background, np.float64)
         self.lighting = lighting
-        mesh = trimesh.Trimesh(surface.vertices, surface.faces, process=False)
-        self._intersector = RayMeshIntersector(mesh)
+        self._scene = rtcore_scene.EmbreeScene()
+        TriangleMesh(
+            scene=self._scene,
+            vertices=np.ascontiguousarray(surface.vertices, np.float32),
+            indices=np.ascontiguousarray(surface.faces, np.int32),
+        )
         self._corner_normals = corner_normals(surface.vertices, surface.faces, lighting.crease_angle_deg)
-        self._triangles = surface.vertices[surface.faces]
+
+    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """First hits of rays.
+
+        Args:
+            origins: (N, 3) ray origins.
+            dirs: (N, 3) ray directions (any length: the returned ``t`` is in units of it).
+
+        Returns:
+            ray indices that hit (M,), their faces (M,), the ray parameters t (M,) and barycentrics (M, 3) of the
+            hit points in their faces' corner order.
+        """
+        out = self._scene.run(
+            np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(dirs, np.float32), output=1
+        )
+        ray = np.flatnonzero(out["geomID"] != -1)
+        u, v = out["u"][ray].astype(np.float64), out["v"][ray].astype(np.float64)
+        bary = np.stack([1.0 - u - v, u, v], 1)
+        return ray, out["primID"][ray].astype(np.int64), out["tfar"][ray].astype(np.float64), bary
 
     def render(self, intr: Intrinsics, c2w: np.ndarray) -> Frame:
         """Render the four maps of one view from camera-to-world pose ``c2w`` (4, 4)."""
         origins, dirs = world_rays(intr, c2w)
-        unit = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
-        face, ray, points = self._intersector.intersects_id(
-            origins, unit, multiple_hits=False, return_locations=True
-        )
+        # each direction has unit length along the camera's -z axis, so a hit's t is its z-depth
+        ray, face, z, bary = self.cast(origins, dirs)
         h, w = intr.height, intr.width
         rgb = np.broadcast_to(self.background, (h * w, 3)).copy()
         depth = np.zeros(h * w, np.float32)
         aff = np.zeros(h * w, np.uint8)
         part = np.zeros(h * w, np.uint8)
         if len(face):
-            forward = -c2w[:3, 2]
-            z = (points - c2w[:3, 3]) @ forward
-            in_range = z > 0
-            face, ray, points, z = face[in_range], ray[in_range], points[in_range], z[in_range]
-            bary = trimesh.triangles.points_to_barycentric(self._triangles[face], points)
-            bary = np.clip(bary, 0.0, 1.0)
-            bary /= bary.sum(axis=1, keepdims=True)
+            points = origins[ray] + z[:, None] * dirs[ray]
             normals = np.einsum("nk,nkc->nc", bary, self._corner_normals[face])
             normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-            cos = np.abs(np.einsum("nc,nc->n", normals, unit[ray]))
+            unit = dirs[ray] / np.linalg.norm(dirs[ray], axis=1, keepdims=True)
+            cos = np.abs(np.einsum("nc,nc->n", normals, unit))
             light = self.lighting.ambient + self.lighting.diffuse * cos
             rgb[ray] = albedo(self.surface, face, points, bary) * light[:, None]
             depth[ray] = z

@@ -1,0 +1,68 @@
+"""The ``affnerf`` command: one verb per job, each a thin layer over the Python API.
+
+Errors caused by input print one line (``affnerf: error: <file>: <problem>``) and exit with code 2;
+``--debug`` (anywhere on the command line) shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+from collections.abc import Sequence
+
+from tyro.extras import SubcommandApp
+
+from affnerf.errors import AffnerfError
+
+
+def build_app() -> SubcommandApp:
+    """The command tree."""
+    from affnerf.cli import data, demo
+
+    app = SubcommandApp()
+    app.command(data.app, name="data", help="Generate, import, index, preview and summarise datasets.")
+    app.command(demo.demo, name="demo")
+    return app
+
+
+class _OneLineFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        return f"affnerf: {record.levelname.lower()}: {record.getMessage()}"
+
+
+def _configure_logging(debug: bool) -> None:
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(_OneLineFormatter())
+    root = logging.getLogger("affnerf")
+    root.handlers[:] = [handler]
+    root.setLevel(logging.DEBUG if debug else logging.INFO)
+    root.propagate = False
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code (0 success, 2 bad input, 130 interrupted)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args
+    args = [a for a in args if a != "--debug"]
+    _configure_logging(debug)
+    try:
+        build_app().cli(prog="affnerf", args=args)
+    except AffnerfError as exc:
+        if debug:
+            raise
+        print(f"affnerf: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # e.g. a read-only or full disk: name the file, keep it to one line
+        if debug:
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"affnerf: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("affnerf: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,122 @@
+"""Reading datasets: the index, each object's record, and its frames decoded lazily from the PNGs.
+
+Nothing is decoded until asked for, so a dataset far larger than memory can be opened and sampled.
+
+Example:
+    >>> ds = Dataset.open("data/mini")                          # doctest: +SKIP
+    >>> obj = ds.load_object(ds.objects(split="train")[0])      # doctest: +SKIP
+    >>> obj.rgb(0).shape, obj.pose(0).shape                     # doctest: +SKIP
+    ((300, 400, 3), (4, 4))
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from affnerf.data.format import DatasetIndex, IndexEntry, ObjectRecord, read_index, read_transforms
+from affnerf.data.images import read_depth, read_labels, read_rgb
+from affnerf.data.render import Frame
+from affnerf.errors import input_error
+
+
+@dataclass
+class ObjectData:
+    """One object folder: its ``transforms.json`` record and lazy access to its frames."""
+
+    folder: Path
+    record: ObjectRecord
+
+    @classmethod
+    def open(cls, folder: Path) -> ObjectData:
+        """Read and validate ``folder/transforms.json``."""
+        folder = Path(folder)
+        return cls(folder, read_transforms(folder / "transforms.json"))
+
+    def __len__(self) -> int:
+        return len(self.record.frames)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) of every frame."""
+        return self.record.intrinsics.width, self.record.intrinsics.height
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(N, 4, 4) camera-to-world poses."""
+        return np.stack([f.transform_matrix for f in self.record.frames])
+
+    def pose(self, i: int) -> np.ndarray:
+        """(4, 4) camera-to-world pose of frame ``i``."""
+        return self.record.frames[i].transform_matrix
+
+    def rgb(self, i: int) -> np.ndarray:
+        """(H, W, 3) uint8 colour of frame ``i``."""
+        return read_rgb(self.folder / self.record.frames[i].file_path, self.size)
+
+    def depth(self, i: int) -> np.ndarray:
+        """(H, W) float32 z-depth in metres of frame ``i`` (0 = no surface)."""
+        unit = self.record.depth_unit_scale_factor
+        return read_depth(self.folder / self.record.frames[i].depth_file_path, unit, self.size)
+
+    def affordance(self, i: int) -> np.ndarray:
+        """(H, W) uint8 affordance ids of frame ``i``."""
+        path = self.folder / self.record.frames[i].affordance_file_path
+        return read_labels(path, len(self.record.affordance_classes), self.size)
+
+    def part(self, i: int) -> np.ndarray:
+        """(H, W) uint8 part ids of frame ``i``."""
+        path = self.folder / self.record.frames[i].part_file_path
+        labels = read_labels(path, None, self.size)
+        known = {0} | {p.id for p in self.record.parts}
+        unknown = set(np.unique(labels).tolist()) - known
+        if unknown:
+            raise input_error(path, f"part ids {sorted(unknown)} are not in the object's parts")
+        return labels
+
+    def frame(self, i: int) -> Frame:
+        """All four maps of frame ``i``."""
+        return Frame(self.rgb(i), self.depth(i), self.affordance(i), self.part(i))
+
+
+@dataclass
+class Dataset:
+    """A dataset root and its validated index."""
+
+    root: Path
+    index: DatasetIndex
+
+    @classmethod
+    def open(cls, root: Path | str) -> Dataset:
+        """Read ``root/dataset.json``."""
+        root = Path(root)
+        return cls(root, read_index(root))
+
+    @property
+    def affordance_classes(self) -> list[str]:
+        return self.index.affordance_classes
+
+    def objects(self, split: str | None = None, categories: list[str] | None = None) -> list[IndexEntry]:
+        """Index entries, filtered by split and categories when given."""
+        return [
+            o
+            for o in self.index.objects
+            if (split is None or o.split == split) and (categories is None or o.category in categories)
+        ]
+
+    def load_object(self, entry: IndexEntry | str) -> ObjectData:
+        """Open one object by entry or id, checking it agrees with the index."""
+        if isinstance(entry, str):
+            matches = [o for o in self.index.objects if o.id == entry]
+            if not matches:
+                raise input_error(self.root / "dataset.json", f"no object with id {entry!r}")
+            entry = matches[0]
+        folder = self.root / entry.path
+        if not (folder / "transforms.json").is_file():
+            raise input_error(folder, "object folder listed in dataset.json is missing or incomplete")
+        data = ObjectData.open(folder)
+        if data.record.affordance_classes != self.affordance_classes:
+            raise input_error(folder / "transforms.json", "affordance_classes differ from dataset.json")
+        return data

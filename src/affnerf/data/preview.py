@@ -1,0 +1,68 @@
+"""A contact sheet of a dataset: for several objects and views, RGB | depth | affordance overlay, with a legend."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from affnerf.data.dataset import Dataset
+from affnerf.errors import AffnerfError
+from affnerf.viz import depth_to_color, grid, legend, overlay_affordance, stack_rows, text_strip
+
+
+def preview_sheet(
+    root: Path,
+    objects: int = 8,
+    views: int = 3,
+    split: str | None = None,
+    tile_width: int = 200,
+) -> np.ndarray:
+    """Build the contact sheet of a dataset.
+
+    Args:
+        root: dataset root.
+        objects: how many objects (spread over categories: round-robin by category).
+        views: views per object (evenly spaced through its frames).
+        split: only objects of this split, if given.
+        tile_width: width of each image tile in pixels.
+
+    Returns:
+        (H, W, 3) uint8 sheet: one row per object (its id above it), three tiles per view, a legend below.
+    """
+    ds = Dataset.open(root)
+    entries = ds.objects(split=split)
+    if not entries:
+        raise AffnerfError(f"{Path(root) / 'dataset.json'}: no objects{f' in split {split}' if split else ''}")
+    by_category: dict[str, list] = {}
+    for e in entries:
+        by_category.setdefault(e.category, []).append(e)
+    chosen = []
+    while len(chosen) < objects and any(by_category.values()):
+        for cat in list(by_category):
+            if by_category[cat] and len(chosen) < objects:
+                chosen.append(by_category[cat].pop(0))
+    rows, present = [], set()
+    for entry in chosen:
+        obj = ds.load_object(entry)
+        tiles = []
+        for i in np.linspace(0, len(obj) - 1, views).round().astype(int):
+            rgb, depth, aff = obj.rgb(i), obj.depth(i), obj.affordance(i)
+            present |= set(np.unique(aff).tolist())
+            for tile in (rgb, depth_to_color(depth), overlay_affordance(rgb, aff)):
+                h = round(tile.shape[0] * tile_width / tile.shape[1])
+                tiles.append(np.asarray(Image.fromarray(tile).resize((tile_width, h), Image.NEAREST)))
+        body = grid([tiles], pad=2)
+        rows.append(stack_rows([text_strip(f"{entry.id} ({entry.split})  rgb | depth | affordance", body.shape[1]), body]))
+    sheet = stack_rows(rows)
+    ids = sorted(c for c in present if c > 0)
+    return stack_rows([sheet, legend(ids, ds.affordance_classes, sheet.shape[1])])
+
+
+def write_preview(root: Path, out: Path, **kwargs: int | str | None) -> Path:
+    """Write :func:`preview_sheet` as a PNG (parent folders are created)."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(preview_sheet(root, **kwargs)).save(out)  # type: ignore[arg-type]
+    return out

@@ -1,0 +1,99 @@
+"""Labelled triangle meshes in PLY: vertices and faces with named integer properties and optional colours.
+
+Used for the dataset's ground-truth ``mesh.ply`` (per-face and per-vertex ``part`` and ``affordance``) and for the
+predicted affordance models (a vertex property ``affordance``). Any PLY reader sees an ordinary mesh; ours also
+returns the extra properties.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from affnerf.errors import input_error
+
+
+@dataclass
+class LabelledMesh:
+    """A triangle mesh with named per-vertex and per-face integer properties.
+
+    Attributes:
+        vertices: (V, 3) float positions.
+        faces: (F, 3) int vertex indices.
+        vertex_props: name -> (V,) integer array.
+        face_props: name -> (F,) integer array.
+        vertex_colors: (V, 3) uint8 RGB, or None.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    vertex_props: dict[str, np.ndarray] = field(default_factory=dict)
+    face_props: dict[str, np.ndarray] = field(default_factory=dict)
+    vertex_colors: np.ndarray | None = None
+
+    def to_trimesh(self) -> trimesh.Trimesh:
+        """A trimesh of the geometry (and colours), without the properties."""
+        mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
+        if self.vertex_colors is not None:
+            mesh.visual.vertex_colors = np.asarray(self.vertex_colors, np.uint8)
+        return mesh
+
+
+def write_labelled_ply(path: Path, mesh: LabelledMesh) -> None:
+    """Write a binary PLY with the mesh's properties, atomically (temporary file + rename)."""
+    path = Path(path)
+    tm = mesh.to_trimesh()
+    for name, values in mesh.vertex_props.items():
+        tm.vertex_attributes[name] = np.asarray(values)
+    for name, values in mesh.face_props.items():
+        tm.face_attributes[name] = np.asarray(values)
+    data = tm.export(file_type="ply", encoding="binary")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+_GEOMETRY_FIELDS = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "vertex_indices", "s", "t"}
+
+
+def read_labelled_ply(path: Path) -> LabelledMesh:
+    """Read a PLY mesh with its extra integer vertex and face properties.
+
+    Raises:
+        AffnerfError: for a missing or unreadable file, a mesh without faces, or non-finite vertices.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise input_error(path, "file not found")
+    try:
+        tm = trimesh.load(path, file_type="ply", process=False, force="mesh")
+    except Exception as exc:  # trimesh raises many types for malformed files
+        raise input_error(path, f"cannot read PLY mesh ({type(exc).__name__}: {exc})") from None
+    if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0:
+        raise input_error(path, "mesh has no faces")
+    vertices = np.asarray(tm.vertices, np.float64)
+    if not np.isfinite(vertices).all():
+        raise input_error(path, "mesh has non-finite vertices")
+    raw = tm.metadata.get("_ply_raw", {})
+    props: dict[str, dict[str, np.ndarray]] = {"vertex": {}, "face": {}}
+    for element in ("vertex", "face"):
+        data = raw.get(element, {}).get("data")
+        if data is None or data.dtype.names is None:
+            continue
+        for name in data.dtype.names:
+            if name not in _GEOMETRY_FIELDS and np.issubdtype(data[name].dtype, np.number) and data[name].ndim == 1:
+                props[element][name] = np.asarray(data[name])
+    colors = None
+    if tm.visual.kind == "vertex":
+        colors = np.asarray(tm.visual.vertex_colors)[:, :3].astype(np.uint8)
+    return LabelledMesh(vertices, np.asarray(tm.faces, np.int64), props["vertex"], props["face"], colors)
