@@ -89,3 +89,15 @@ def test_index_rebuild_lists_exactly_the_complete_folders(tiny_dataset, tmp_path
 def test_bad_shard_is_refused(tmp_path, shard, tiny_config):
     with pytest.raises(AffnerfError, match="shard"):
         generate_dataset(tiny_config(tmp_path / "x", shard=shard), progress=False)
+
+
+def test_a_failing_worker_stops_the_run_and_keeps_the_index_whole(tmp_path, tiny_config):
+    root = tmp_path / "failing"
+    root.mkdir()
+    (root / "pen").write_text("not a folder")  # every pen object fails to be placed
+    with pytest.raises(OSError):
+        generate_dataset(tiny_config(root, workers=2), progress=False)
+    listed = [o.id for o in Dataset.open(root).objects()] if (root / "dataset.json").exists() else []
+    assert all(i.startswith("screwdriver") for i in listed)
+    for oid in listed:
+        assert (root / "screwdriver" / oid / "transforms.json").is_file()

@@ -7,6 +7,7 @@ Poses are camera-to-world in the OpenGL/Blender convention: the camera looks alo
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -95,17 +96,24 @@ class CameraSampler:
         return np.stack([look_at(e, t) for e, t in zip(eyes, targets)])
 
 
+@functools.lru_cache(maxsize=8)
+def _cached_directions(intr: Intrinsics) -> np.ndarray:
+    u = (np.arange(intr.width) + 0.5 - intr.cx) / intr.fl_x
+    v = -(np.arange(intr.height) + 0.5 - intr.cy) / intr.fl_y
+    uu, vv = np.meshgrid(u, v)
+    dirs = np.stack([uu, vv, -np.ones_like(uu)], -1)
+    dirs.flags.writeable = False
+    return dirs
+
+
 def pixel_directions(intr: Intrinsics) -> np.ndarray:
-    """(H, W, 3) camera-frame ray directions through pixel centres, with z = -1 (not normalised).
+    """(H, W, 3) camera-frame ray directions through pixel centres, with z = -1 (not normalised; read-only, cached).
 
     Example:
         >>> pixel_directions(Intrinsics(2, 2, 1.0, 1.0, 1.0, 1.0))[0, 0].tolist()
         [-0.5, 0.5, -1.0]
     """
-    u = (np.arange(intr.width) + 0.5 - intr.cx) / intr.fl_x
-    v = -(np.arange(intr.height) + 0.5 - intr.cy) / intr.fl_y
-    uu, vv = np.meshgrid(u, v)
-    return np.stack([uu, vv, -np.ones_like(uu)], -1)
+    return _cached_directions(intr)
 
 
 def world_rays(intr: Intrinsics, c2w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -8,11 +8,9 @@ what is missing.
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from queue import Empty
 from typing import Any
 
 import numpy as np
@@ -21,6 +19,7 @@ from tqdm import tqdm
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, CameraSampler, Intrinsics
 from affnerf.data.format import IndexEntry, read_index
 from affnerf.data.index import update_index
+from affnerf.data.pool import run_jobs
 from affnerf.data.writer import clear_partial, is_complete, write_object
 from affnerf.errors import AffnerfError
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed, parse_categories
@@ -167,20 +166,6 @@ def _check_settings(config: GenerateConfig) -> dict[str, Any]:
     return previous
 
 
-_frame_queue: Any = None
-
-
-def _init_worker(queue: Any) -> None:
-    global _frame_queue
-    _frame_queue = queue
-
-
-def _worker(args: tuple[GenerateConfig, ObjectJob]) -> IndexEntry:
-    config, job = args
-    make_job_object(config, job, on_frame=lambda: _frame_queue.put(1))
-    return job.entry
-
-
 @dataclass
 class GenerateReport:
     """What a run did: objects made, objects found complete, frames rendered, seconds taken."""
@@ -227,23 +212,10 @@ def generate_dataset(config: GenerateConfig, progress: bool = True) -> GenerateR
                 report.made.append(job.entry.id)
                 bars.object()
         else:
-            ctx = mp.get_context("spawn")
-            queue = ctx.Queue()
-            with ctx.Pool(config.workers, initializer=_init_worker, initargs=(queue,)) as pool:
-                pending = pool.imap_unordered(_worker, [(config, j) for j in todo])
-                remaining = len(todo)
-                while remaining:
-                    try:
-                        entry = pending.next(timeout=0.2)
-                    except mp.TimeoutError:
-                        bars.drain(queue)
-                        continue
-                    bars.drain(queue)
-                    update_index(root, [entry])
-                    report.made.append(entry.id)
-                    bars.object()
-                    remaining -= 1
-                bars.drain(queue)
+            for entry in run_jobs(config, todo, config.workers, bars.frames.update):
+                update_index(root, [entry])
+                report.made.append(entry.id)
+                bars.object()
     finally:
         bars.close()
     report.seconds = time.perf_counter() - start
@@ -263,16 +235,6 @@ class _Bars:
 
     def object(self) -> None:
         self.objects.update(1)
-
-    def drain(self, queue: Any) -> None:
-        n = 0
-        while True:
-            try:
-                n += queue.get_nowait()
-            except Empty:
-                break
-        if n:
-            self.frames.update(n)
 
     def close(self) -> None:
         self.frames.close()

@@ -61,31 +61,28 @@ def corner_normals(vertices: np.ndarray, faces: np.ndarray, crease_angle_deg: fl
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area2 = np.linalg.norm(cross, axis=1, keepdims=True)
     face_n = cross / np.maximum(area2, 1e-20)
-    # incidence: for every (vertex, face) pair, sorted by vertex
-    vert_of = faces.reshape(-1)
-    face_of = np.repeat(np.arange(len(faces)), 3)
-    order = np.argsort(vert_of, kind="stable")
-    vert_sorted, face_sorted = vert_of[order], face_of[order]
-    starts = np.searchsorted(vert_sorted, np.arange(len(vertices)))
+    # incidence entries (one per face corner), grouped by vertex
+    order = np.argsort(faces.reshape(-1), kind="stable")
+    vert_sorted = faces.reshape(-1)[order]
+    face_sorted = order // 3
     counts = np.bincount(vert_sorted, minlength=len(vertices))
-    max_deg = int(counts.max()) if len(counts) else 0
-    # (V, max_deg) incident faces, -1 padded
-    slots = np.arange(max_deg)[None, :]
-    valid = slots < counts[:, None]
-    idx = np.where(valid, starts[:, None] + slots, 0)
-    incident = np.where(valid, face_sorted[np.minimum(idx, len(face_sorted) - 1)], -1)
-    cos_limit = np.cos(np.radians(crease_angle_deg))
-    out = np.empty((len(faces), 3, 3))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    # every (corner, neighbouring face) pair around the same vertex
+    group = counts[vert_sorted]
+    a = np.repeat(np.arange(len(order)), group)
+    offsets = np.arange(len(a)) - np.repeat(np.cumsum(group) - group, group)
+    b = starts[vert_sorted[a]] + offsets
+    fa, fb = face_sorted[a], face_sorted[b]
+    keep = np.einsum("pk,pk->p", face_n[fa], face_n[fb]) >= np.cos(np.radians(crease_angle_deg))
     weighted = face_n * area2
-    for k in range(3):
-        nbrs = incident[faces[:, k]]  # (F, max_deg)
-        ok = nbrs >= 0
-        nb_n = face_n[np.maximum(nbrs, 0)]  # (F, max_deg, 3)
-        close = ok & (np.einsum("fdk,fk->fd", nb_n, face_n) >= cos_limit)
-        summed = np.einsum("fd,fdk->fk", close.astype(np.float64), weighted[np.maximum(nbrs, 0)])
-        norm = np.linalg.norm(summed, axis=1, keepdims=True)
-        out[:, k] = np.where(norm > 1e-20, summed / np.maximum(norm, 1e-20), face_n)
-    return out
+    summed = np.zeros((len(order), 3))
+    for c in range(3):
+        summed[:, c] = np.bincount(a[keep], weights=weighted[fb[keep], c], minlength=len(order))
+    norm = np.linalg.norm(summed, axis=1, keepdims=True)
+    normals_sorted = np.where(norm > 1e-20, summed / np.maximum(norm, 1e-20), face_n[face_sorted])
+    out = np.empty((len(order), 3))
+    out[order] = normals_sorted
+    return out.reshape(len(faces), 3, 3)
 
 
 def _pattern_weight(material: Material, points: np.ndarray) -> np.ndarray:

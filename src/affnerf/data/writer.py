@@ -18,7 +18,6 @@ import numpy as np
 from affnerf.data.cameras import Intrinsics
 from affnerf.data.format import FrameRecord, IndexEntry, ObjectRecord, PartRecord, write_json_atomic
 from affnerf.data.images import write_depth, write_labels, write_rgb
-from affnerf.data.render import Renderer
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.objects.asset import ObjectAsset, SurfaceMesh, merge_parts
 from affnerf.vocab import AFFORDANCE_CLASSES
@@ -87,6 +86,8 @@ def write_object(
     Returns:
         The object folder.
     """
+    from affnerf.data.render import Renderer  # loaded late: see affnerf.data.pool on the ray caster's threads
+
     root = Path(root)
     final = root / entry.path
     clear_partial(root, entry.id)

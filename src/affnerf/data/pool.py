@@ -1,0 +1,105 @@
+"""Worker processes for dataset generation, each pinned to its own core from the start.
+
+Embree's thread pool (TBB) is sized by the cores a process may use when the library loads, and trimesh loads
+it on import. Two workers free to use both cores each start a pool of two threads that fight over them
+(measured: fewer frames per second than one process alone); a worker confined to one core from birth gets a
+pool of one thread and the workers add up. A child inherits its parent's core mask when it is created, so the
+parent narrows its own mask to one core while it starts each worker and restores it afterwards.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import queue as queue_module
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+_POLL_SECONDS = 0.2
+
+
+def _worker_loop(tasks: Any, results: Any, progress: Any) -> None:
+    """Run jobs from ``tasks`` until a None arrives; report ("ok", entry) or ("error", exception)."""
+    from affnerf.data.generate import make_job_object
+
+    while True:
+        item = tasks.get()
+        if item is None:
+            return
+        config, job = item
+        try:
+            make_job_object(config, job, on_frame=lambda: progress.put(1))
+            results.put(("ok", job.entry))
+        except BaseException as exc:  # handed to the parent, which raises it
+            results.put(("error", exc))
+            return
+
+
+def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
+    """Start ``count`` worker processes, the i-th confined to the i-th core (round robin)."""
+    original = os.sched_getaffinity(0)
+    cores = sorted(original)
+    procs = []
+    try:
+        for i in range(count):
+            if len(cores) > 1:
+                os.sched_setaffinity(0, {cores[i % len(cores)]})
+            proc = ctx.Process(target=_worker_loop, args=args, daemon=True)
+            proc.start()
+            procs.append(proc)
+    finally:
+        os.sched_setaffinity(0, original)
+    return procs
+
+
+def run_jobs(
+    config: Any, jobs: Sequence[Any], workers: int, on_frames: Callable[[int], None]
+) -> Iterator[Any]:
+    """Make ``jobs`` in ``workers`` pinned processes, yielding each finished job's index entry.
+
+    Args:
+        config: the GenerateConfig.
+        jobs: the ObjectJobs to make.
+        workers: number of processes.
+        on_frames: called in this process with the number of frames finished since the last call.
+
+    Raises:
+        The first exception a job raised, after stopping every worker.
+    """
+    ctx = mp.get_context("spawn")
+    tasks, results, progress = ctx.Queue(), ctx.Queue(), ctx.Queue()
+    for job in jobs:
+        tasks.put((config, job))
+    for _ in range(workers):
+        tasks.put(None)
+    procs = _start_pinned(ctx, workers, (tasks, results, progress))
+    try:
+        remaining = len(jobs)
+        while remaining:
+            try:
+                status, value = results.get(timeout=_POLL_SECONDS)
+            except queue_module.Empty:
+                on_frames(_drain(progress))
+                if not any(p.is_alive() for p in procs):
+                    raise RuntimeError("every generation worker stopped before finishing its objects") from None
+                continue
+            on_frames(_drain(progress))
+            if status == "error":
+                raise value
+            remaining -= 1
+            yield value
+        on_frames(_drain(progress))
+    finally:
+        for proc in procs:
+            if proc.is_alive():
+                proc.terminate()
+            proc.join()
+
+
+def _drain(progress: Any) -> int:
+    count = 0
+    while True:
+        try:
+            count += progress.get_nowait()
+        except queue_module.Empty:
+            return count
