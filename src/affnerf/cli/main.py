@@ -15,13 +15,15 @@ from tyro.extras import SubcommandApp
 from affnerf.errors import AffnerfError
 
 
-def build_app() -> SubcommandApp:
-    """The command tree."""
+def build_app(args: Sequence[str] = ()) -> SubcommandApp:
+    """The command tree (``args`` lets ``train`` take its defaults from the preset they name)."""
     from affnerf.cli import data, demo
+    from affnerf.cli.train import make_train_command
 
     app = SubcommandApp()
     app.command(data.app, name="data", help="Generate, import, index, preview and summarise datasets.")
-    app.command(demo.demo, name="demo")
+    app.command(make_train_command(args), name="train")
+    app.command(demo.demo, name="demo", help="Run the whole pipeline at a small scale on this machine.")
     return app
 
 
@@ -46,7 +48,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = [a for a in args if a != "--debug"]
     _configure_logging(debug)
     try:
-        build_app().cli(prog="affnerf", args=args)
+        from affnerf.cli.train import strip_flag
+
+        build_app(args).cli(prog="affnerf", args=strip_flag(args, "--config-file"))
     except AffnerfError as exc:
         if debug:
             raise

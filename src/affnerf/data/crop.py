@@ -64,4 +64,4 @@ def crop_object(
     s = int(np.ceil(side))
     canvas = Image.new("RGB", (s, s), tuple(int(c) for c in bg))
     canvas.paste(Image.fromarray(np.ascontiguousarray(clean)), (-left, -top))
-    return np.asarray(canvas.resize((size, size), Image.BILINEAR))
+    return np.array(canvas.resize((size, size), Image.BILINEAR))

@@ -1,0 +1,1 @@
+"""Evaluation: segmentation metrics (GUIDE 5) and the protocol that reproduces the paper's Table 2."""

@@ -1,0 +1,112 @@
+"""The conditional radiance field of AFF-NeRF.
+
+F_xyz: (PE(x, y, z), shape code) -> (density, affordance logits, feature q); F_dir: (PE(direction), appearance
+code, q) -> colour. The affordance head reads q before the view direction enters (as Semantic-NeRF's semantic
+head does), so affordance is a property of the point, not of the viewpoint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from affnerf.model.encoding import encoding_dim, positional_encoding
+
+
+@dataclass(frozen=True)
+class FieldOutput:
+    """Field values at sample points.
+
+    Attributes:
+        sigma: (..., ) non-negative density.
+        rgb: (..., 3) colour in [0, 1].
+        logits: (..., C - 1) affordance logits over the object classes (class 0, background, is rendered from
+            transmittance, see :func:`affnerf.rendering.volume.render_affordance`).
+    """
+
+    sigma: torch.Tensor
+    rgb: torch.Tensor
+    logits: torch.Tensor
+
+
+class ConditionalField(nn.Module):
+    """An MLP field conditioned on a shape code and an appearance code.
+
+    Args:
+        num_classes: affordance classes including background (the dataset's ``affordance_classes``).
+        code_dim: size of each code.
+        width: hidden width of the position trunk.
+        depth: number of trunk layers; the input is concatenated again after layer ``depth // 2`` (NeRF's skip).
+        color_width: hidden width of the colour head.
+        affordance_width: hidden width of the affordance head.
+        pe_xyz: positional-encoding frequencies of positions.
+        pe_dir: positional-encoding frequencies of view directions.
+    """
+
+    def __init__(
+        self,
+        num_classes: int,
+        code_dim: int = 32,
+        width: int = 256,
+        depth: int = 8,
+        color_width: int = 128,
+        affordance_width: int = 128,
+        pe_xyz: int = 10,
+        pe_dir: int = 4,
+    ) -> None:
+        super().__init__()
+        self.pe_xyz, self.pe_dir = pe_xyz, pe_dir
+        in_dim = encoding_dim(3, pe_xyz) + code_dim
+        self.skip = depth // 2
+        layers = []
+        for i in range(depth):
+            d_in = in_dim if i == 0 else width + (in_dim if i == self.skip else 0)
+            layers.append(nn.Linear(d_in, width))
+        self.trunk_layers = nn.ModuleList(layers)
+        self.density = nn.Linear(width, 1)
+        self.feature = nn.Linear(width, width)
+        self.affordance = nn.Sequential(nn.Linear(width, affordance_width), nn.ReLU(), nn.Linear(affordance_width, num_classes - 1))
+        self.color = nn.Sequential(
+            nn.Linear(width + encoding_dim(3, pe_dir) + code_dim, color_width), nn.ReLU(), nn.Linear(color_width, 3)
+        )
+
+    def trunk(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:
+        """(N, width) trunk features of (N, 3) points under (N, code_dim) shape codes."""
+        x_in = torch.cat([positional_encoding(points, self.pe_xyz), shape_code], dim=-1)
+        h = x_in
+        for i, layer in enumerate(self.trunk_layers):
+            if i == self.skip:
+                h = torch.cat([h, x_in], dim=-1)
+            h = torch.relu(layer(h))
+        return h
+
+    def density_from(self, h: torch.Tensor) -> torch.Tensor:
+        """(N,) non-negative density from trunk features (softplus, shifted so a fresh field starts nearly empty)."""
+        return nn.functional.softplus(self.density(h)[..., 0] - 1.0)
+
+    def forward(
+        self, points: torch.Tensor, dirs: torch.Tensor, shape_code: torch.Tensor, appearance_code: torch.Tensor
+    ) -> FieldOutput:
+        """Evaluate the field.
+
+        Args:
+            points: (N, 3) positions in the canonical frame.
+            dirs: (N, 3) unit view directions.
+            shape_code: (N, code_dim) shape code of each point's object.
+            appearance_code: (N, code_dim) appearance code of each point's object.
+        """
+        h = self.trunk(points, shape_code)
+        q = self.feature(h)
+        d_in = torch.cat([q, positional_encoding(dirs, self.pe_dir), appearance_code], dim=-1)
+        return FieldOutput(sigma=self.density_from(h), rgb=torch.sigmoid(self.color(d_in)), logits=self.affordance(q))
+
+    def density_only(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:
+        """(N,) density alone, for mesh extraction and occupancy grids."""
+        return self.density_from(self.trunk(points, shape_code))
+
+    def geometry(self, points: torch.Tensor, shape_code: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """(N,) density and (N, C - 1) affordance logits at points (no colour), for labelling meshes."""
+        h = self.trunk(points, shape_code)
+        return self.density_from(h), self.affordance(self.feature(h))

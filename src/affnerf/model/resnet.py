@@ -1,0 +1,91 @@
+"""ResNet18 in plain torch, with a width multiplier and GroupNorm, trained from scratch.
+
+Normalisation: training feeds the encoders a handful of images per step (one per object, a few objects), and
+prediction feeds one. BatchNorm's statistics over four images are noisy and differ between training and
+inference; GroupNorm normalises each image on its own, so an image encodes the same way in a batch of one or
+of many, in training and at prediction.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+
+def group_norm(channels: int, max_groups: int = 8) -> nn.GroupNorm:
+    """GroupNorm with the largest group count <= ``max_groups`` that divides ``channels``."""
+    groups = max(g for g in range(1, max_groups + 1) if channels % g == 0)
+    return nn.GroupNorm(groups, channels)
+
+
+class BasicBlock(nn.Module):
+    """Two 3x3 convolutions with a residual connection (projected when the shape changes)."""
+
+    def __init__(self, c_in: int, c_out: int, stride: int) -> None:
+        super().__init__()
+        self.conv1 = nn.Conv2d(c_in, c_out, 3, stride, 1, bias=False)
+        self.norm1 = group_norm(c_out)
+        self.conv2 = nn.Conv2d(c_out, c_out, 3, 1, 1, bias=False)
+        self.norm2 = group_norm(c_out)
+        self.shortcut: nn.Module = nn.Identity()
+        if stride != 1 or c_in != c_out:
+            self.shortcut = nn.Sequential(nn.Conv2d(c_in, c_out, 1, stride, bias=False), group_norm(c_out))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = torch.relu(self.norm1(self.conv1(x)))
+        y = self.norm2(self.conv2(y))
+        return torch.relu(y + self.shortcut(x))
+
+
+class ResNet18(nn.Module):
+    """ResNet18 feature extractor: (B, 3, H, W) images in [0, 1] -> feature maps of four stages.
+
+    Args:
+        width: channel multiplier; 1.0 gives the standard 64-128-256-512 channels.
+    """
+
+    def __init__(self, width: float = 1.0) -> None:
+        super().__init__()
+        chans = [max(8, int(round(c * width))) for c in (64, 128, 256, 512)]
+        self.channels = chans
+        self.stem = nn.Sequential(
+            nn.Conv2d(3, chans[0], 7, 2, 3, bias=False), group_norm(chans[0]), nn.ReLU(), nn.MaxPool2d(3, 2, 1)
+        )
+        layers = []
+        c_in = chans[0]
+        for i, c in enumerate(chans):
+            stride = 1 if i == 0 else 2
+            layers.append(nn.Sequential(BasicBlock(c_in, c, stride), BasicBlock(c, c, 1)))
+            c_in = c
+        self.layers = nn.ModuleList(layers)
+        for m in self.modules():
+            if isinstance(m, nn.Conv2d):
+                nn.init.kaiming_normal_(m.weight, mode="fan_out", nonlinearity="relu")
+
+    def forward(self, images: torch.Tensor) -> list[torch.Tensor]:
+        """Feature maps after each of the four stages: [(B, C_i, H / 2^(i+2), W / 2^(i+2))]."""
+        x = self.stem(images * 2.0 - 1.0)
+        feats = []
+        for layer in self.layers:
+            x = layer(x)
+            feats.append(x)
+        return feats
+
+
+class CodeEncoder(nn.Module):
+    """An image to a global code: ResNet18, global average pooling, a linear layer.
+
+    Args:
+        code_dim: size of the code (32 in the paper).
+        width: ResNet18 channel multiplier.
+    """
+
+    def __init__(self, code_dim: int = 32, width: float = 1.0) -> None:
+        super().__init__()
+        self.backbone = ResNet18(width)
+        self.head = nn.Linear(self.backbone.channels[-1], code_dim)
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        """(B, 3, H, W) images in [0, 1] -> (B, code_dim) codes."""
+        feat = self.backbone(images)[-1]
+        return self.head(feat.mean(dim=(2, 3)))

@@ -1,0 +1,86 @@
+"""Rendering whole images of an encoded object from any camera, in chunks of rays so any size fits in memory."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from affnerf.data.cameras import Intrinsics
+from affnerf.model.affnerf import AffNeRF, Codes
+from affnerf.rendering.rays import pixel_rays
+
+
+@dataclass
+class RenderedView:
+    """One rendered view.
+
+    Attributes:
+        rgb: (H, W, 3) float colours in [0, 1].
+        depth: (H, W) z-depth in metres where the pixel is mostly opaque (opacity > 0.5), else 0.
+        opacity: (H, W) accumulated opacity.
+        affordance: (H, W, C) class probabilities (class 0 background).
+    """
+
+    rgb: np.ndarray
+    depth: np.ndarray
+    opacity: np.ndarray
+    affordance: np.ndarray
+
+    @property
+    def labels(self) -> np.ndarray:
+        """(H, W) most likely class per pixel."""
+        return self.affordance.argmax(axis=-1).astype(np.uint8)
+
+
+def select_codes(codes: Codes, index: int) -> Codes:
+    """The codes of one object, kept (1, code_dim)."""
+    return Codes(codes.shape[index : index + 1], codes.appearance[index : index + 1])
+
+
+@torch.no_grad()
+def render_view(
+    model: AffNeRF,
+    codes: Codes,
+    intrinsics: Intrinsics,
+    c2w: np.ndarray,
+    background: tuple[float, float, float] | np.ndarray = (1.0, 1.0, 1.0),
+    chunk: int = 1024,
+) -> RenderedView:
+    """Render every pixel of a camera for one object.
+
+    Args:
+        model: the trained model (evaluation mode is the caller's business).
+        codes: the object's codes, (1, code_dim) each.
+        intrinsics: the camera.
+        c2w: (4, 4) camera-to-world pose in the canonical frame.
+        background: RGB in [0, 1].
+        chunk: rays per forward pass (on a CPU about a thousand is fastest: larger chunks spill the caches).
+    """
+    device = next(model.parameters()).device
+    h, w = intrinsics.height, intrinsics.width
+    vv, uu = np.mgrid[0:h, 0:w]
+    pixels = torch.from_numpy(np.stack([uu.ravel(), vv.ravel()], 1))
+    k = torch.tensor([intrinsics.fl_x, intrinsics.fl_y, intrinsics.cx, intrinsics.cy], dtype=torch.float64)
+    origins, dirs = pixel_rays(pixels, k, torch.as_tensor(np.asarray(c2w), dtype=torch.float64))
+    bg = torch.as_tensor(np.asarray(background), dtype=torch.float32, device=device)
+    rgb, depth, opacity, aff = [], [], [], []
+    for start in range(0, h * w, chunk):
+        o = origins[start : start + chunk].float().to(device)
+        d = dirs[start : start + chunk].float().to(device)
+        n = o.shape[0]
+        coarse, fine = model.render_rays(codes, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
+        out = fine if fine is not None else coarse
+        rgb.append(out.rgb.cpu())
+        opacity.append(out.opacity.cpu())
+        depth.append((out.depth / out.opacity.clamp(min=1e-6)).cpu())
+        aff.append(out.affordance.cpu())
+    alpha = torch.cat(opacity).reshape(h, w).numpy()
+    z = torch.cat(depth).reshape(h, w).numpy()
+    return RenderedView(
+        rgb=torch.cat(rgb).reshape(h, w, 3).clamp(0, 1).numpy(),
+        depth=np.where(alpha > 0.5, z, 0.0).astype(np.float32),
+        opacity=alpha,
+        affordance=torch.cat(aff).reshape(h, w, -1).numpy(),
+    )

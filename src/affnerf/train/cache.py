@@ -1,0 +1,130 @@
+"""Training frames as uint8 memory maps: decoded once at the training resolution, never held as float tensors.
+
+For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W) affordance ids, ``crops.npy``
+(N, S, S, 3) encoder crops, the object's pixels of every frame (``fg_pixels.npy``, flat indices, frame i's
+between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the source
+``transforms.json``, so a regenerated object is decoded again). Folders are written under a temporary name and
+renamed, so a crash never leaves a half cache that looks complete.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from affnerf.data.crop import crop_object
+from affnerf.data.dataset import ObjectData
+
+
+@dataclass
+class ObjectFrames:
+    """One object's training frames (memory-mapped, read-only).
+
+    Attributes:
+        object_id: the dataset id.
+        rgb: (N, H, W, 3) uint8.
+        labels: (N, H, W) uint8 affordance ids.
+        crops: (N, S, S, 3) uint8 encoder crops.
+        fg_offsets: (N + 1,) start of each frame's object pixels in ``fg_pixels``.
+        fg_pixels: (M,) flat pixel indices (v * W + u) of the object's pixels, frame after frame.
+        poses: (N, 4, 4) float64 camera-to-world.
+        intrinsics: (4,) fl_x, fl_y, cx, cy at the cached resolution.
+        background: (3,) RGB in [0, 1].
+    """
+
+    object_id: str
+    rgb: np.ndarray
+    labels: np.ndarray
+    crops: np.ndarray
+    fg_offsets: np.ndarray
+    fg_pixels: np.ndarray
+    poses: np.ndarray
+    intrinsics: np.ndarray
+    background: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.poses)
+
+
+def _signature(obj: ObjectData, scale: float, crop: int) -> str:
+    digest = hashlib.sha1((obj.folder / "transforms.json").read_bytes()).hexdigest()[:16]
+    return f"{digest}-{scale:g}-{crop}"
+
+
+def _resize(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarray:
+    if (image.shape[1], image.shape[0]) == size:
+        return image
+    return np.asarray(Image.fromarray(image).resize(size, Image.NEAREST if nearest else Image.BOX))
+
+
+def build_frames(obj: ObjectData, folder: Path, scale: float, crop_size: int) -> None:
+    """Decode an object's frames into a cache folder (see the module docstring)."""
+    intr = obj.record.intrinsics.scaled(scale)
+    size = (intr.width, intr.height)
+    n = len(obj)
+    tmp = folder.parent / f".{folder.name}.{uuid.uuid4().hex[:8]}"
+    tmp.mkdir(parents=True)
+    try:
+        rgb = np.lib.format.open_memmap(tmp / "rgb.npy", "w+", np.uint8, (n, size[1], size[0], 3))
+        labels = np.lib.format.open_memmap(tmp / "labels.npy", "w+", np.uint8, (n, size[1], size[0]))
+        crops = np.lib.format.open_memmap(tmp / "crops.npy", "w+", np.uint8, (n, crop_size, crop_size, 3))
+        background = obj.record.background_color
+        for i in range(n):
+            full_rgb, full_aff = obj.rgb(i), obj.affordance(i)
+            crops[i] = crop_object(full_rgb, full_aff > 0, crop_size, background)
+            rgb[i] = _resize(full_rgb, size, nearest=False)
+            labels[i] = _resize(full_aff, size, nearest=True)
+        for array in (rgb, labels, crops):
+            array.flush()
+        fg = [np.flatnonzero(labels[i].reshape(-1) > 0).astype(np.int32) for i in range(n)]
+        np.save(tmp / "fg_offsets.npy", np.concatenate([[0], np.cumsum([len(f) for f in fg])]).astype(np.int64))
+        np.save(tmp / "fg_pixels.npy", np.concatenate(fg) if fg else np.zeros(0, np.int32))
+        del rgb, labels, crops
+        meta = {
+            "signature": _signature(obj, scale, crop_size),
+            "object_id": obj.record.object_id,
+            "poses": obj.poses.tolist(),
+            "intrinsics": [intr.fl_x, intr.fl_y, intr.cx, intr.cy],
+            "background": list(background),
+        }
+        (tmp / "meta.json").write_text(json.dumps(meta))
+        if folder.exists():
+            shutil.rmtree(folder)
+        os.rename(tmp, folder)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def load_frames(folder: Path) -> ObjectFrames:
+    """Open a cache folder written by :func:`build_frames`."""
+    meta = json.loads((folder / "meta.json").read_text())
+    return ObjectFrames(
+        object_id=meta["object_id"],
+        rgb=np.load(folder / "rgb.npy", mmap_mode="r"),
+        labels=np.load(folder / "labels.npy", mmap_mode="r"),
+        crops=np.load(folder / "crops.npy", mmap_mode="r"),
+        fg_offsets=np.load(folder / "fg_offsets.npy"),
+        fg_pixels=np.load(folder / "fg_pixels.npy", mmap_mode="r"),
+        poses=np.asarray(meta["poses"], np.float64),
+        intrinsics=np.asarray(meta["intrinsics"], np.float64),
+        background=np.asarray(meta["background"], np.float64),
+    )
+
+
+def cached_frames(obj: ObjectData, cache_dir: Path, scale: float, crop_size: int) -> ObjectFrames:
+    """The object's cached frames, decoding them first if the cache is missing or stale."""
+    folder = Path(cache_dir) / f"{obj.record.object_id}"
+    meta = folder / "meta.json"
+    fresh = meta.is_file() and json.loads(meta.read_text()).get("signature") == _signature(obj, scale, crop_size)
+    if not fresh:
+        build_frames(obj, folder, scale, crop_size)
+    return load_frames(folder)

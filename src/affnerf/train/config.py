@@ -1,0 +1,174 @@
+"""Training configuration: typed dataclasses, the ``paper`` and ``small`` presets, and their JSON form.
+
+A run folder keeps the fully resolved config (``config.json``), so a run can be reproduced from its folder
+alone: ``affnerf train --data DIR --out RUN2 --config-file RUN/config.json``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+from affnerf.errors import AffnerfError, input_error
+from affnerf.model.config import ModelConfig
+
+
+@dataclass(frozen=True)
+class OptimConfig:
+    """Adam with an exponential learning-rate decay.
+
+    Attributes:
+        lr: initial learning rate.
+        lr_final: learning rate reached at the last step (decays exponentially from ``lr``).
+        grad_clip: clip the gradient norm to this (0 = no clipping).
+    """
+
+    lr: float = 5e-4
+    lr_final: float = 5e-5
+    grad_clip: float = 0.0
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything a training run depends on.
+
+    Attributes:
+        data: dataset folder (``dataset.json``).
+        out: run folder (config, checkpoints, TensorBoard logs, metrics).
+        config: the preset the other values start from: ``paper`` (GUIDE 4) or ``small`` (2 CPU cores).
+        steps: total steps of the run; a resumed run stops at the same total.
+        resume: continue from the last checkpoint in ``out``.
+        device: ``auto`` (CUDA when available), ``cpu`` or ``cuda``.
+        seed: seed of initialisation, data order and sampling.
+        model: architecture and ray sampling.
+        optim: optimiser and learning-rate schedule.
+        objects_per_step: objects per step and per process (each with its own encoded view).
+        rays_per_step: rays per step and per process.
+        foreground_fraction: share of rays drawn on the object (the rest uniform over the image).
+        affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
+        image_scale: training resolution as a fraction of the dataset's images.
+        categories: comma-separated categories to train on (empty = all of the train split).
+        checkpoint_every: steps between checkpoints.
+        keep_checkpoints: how many recent checkpoints to keep.
+        log_every: steps between logged scalars.
+        val_every: steps between validation renders (0 = never).
+        val_objects: validation objects rendered each time.
+        val_scale: resolution of validation renders as a fraction of the dataset's images.
+        chunk: rays per forward pass when rendering whole images.
+        cache_dir: where decoded training frames are kept (default: ``<out>/cache``).
+        progress: show a progress bar.
+        stop_at: end this invocation after this step with a checkpoint, as though interrupted; ``--resume``
+            continues to ``steps`` (0 = run to the end).
+        time_limit: end this invocation after this many minutes with a checkpoint (0 = no limit); for machines
+            lent in short slots: rerun with ``--resume`` until done.
+    """
+
+    data: Path
+    out: Path
+    config: Literal["paper", "small"] = "paper"
+    steps: int = 200_000
+    resume: bool = False
+    device: Literal["auto", "cpu", "cuda"] = "auto"
+    seed: int = 0
+    model: ModelConfig = field(default_factory=ModelConfig)
+    optim: OptimConfig = field(default_factory=OptimConfig)
+    objects_per_step: int = 4
+    rays_per_step: int = 1024
+    foreground_fraction: float = 0.5
+    affordance_weight: float = 4e-4
+    image_scale: float = 1.0
+    categories: str = ""
+    checkpoint_every: int = 2000
+    keep_checkpoints: int = 3
+    log_every: int = 50
+    val_every: int = 5000
+    val_objects: int = 2
+    val_scale: float = 0.25
+    chunk: int = 1024
+    cache_dir: Path | None = None
+    progress: bool = True
+    stop_at: int = 0
+    time_limit: float = 0.0
+
+
+#: The paper's configuration (GUIDE 4): two ResNet18s, codes of 32, PE 10/4, 64 + 128 samples over the full
+#: [0.1, 1.5] m range, 1024 rays a step, Adam at 5e-4, lambda 4e-4, 400x300 images.
+PAPER = TrainConfig(data=Path("."), out=Path("."))
+
+#: For 2 CPU cores, chosen by measurement (benchmarks/README.md): quarter-width encoders on 64-pixel crops, a
+#: 4-layer 96-wide field, 32 + 32 samples inside the canonical cube, 512 rays over 4 objects, lambda 4e-2.
+SMALL = replace(
+    PAPER,
+    config="small",
+    steps=20_000,
+    model=ModelConfig(
+        encoder_width=0.25,
+        encoder_resolution=64,
+        field_width=96,
+        field_depth=4,
+        color_width=48,
+        affordance_width=48,
+        num_coarse=32,
+        num_fine=32,
+        clip_to_cube=True,
+    ),
+    optim=OptimConfig(lr=1e-3, lr_final=1e-4),
+    rays_per_step=512,
+    affordance_weight=4e-2,
+    image_scale=1.0,
+    checkpoint_every=500,
+    log_every=25,
+    val_every=1000,
+    val_scale=0.5,
+)
+
+PRESETS: dict[str, TrainConfig] = {"paper": PAPER, "small": SMALL}
+
+
+def preset(name: str, data: Path, out: Path) -> TrainConfig:
+    """A preset with the run's data and output folders."""
+    if name not in PRESETS:
+        raise AffnerfError(f"unknown config {name!r} (known: {', '.join(PRESETS)})")
+    return replace(PRESETS[name], data=Path(data), out=Path(out))
+
+
+def config_to_json(config: TrainConfig) -> dict[str, Any]:
+    """The config as nested plain JSON."""
+
+    def plain(value: Any) -> Any:
+        if dataclasses.is_dataclass(value):
+            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        if isinstance(value, Path):
+            return str(value)
+        return value
+
+    return plain(config)
+
+
+def config_from_json(data: dict[str, Any], path: Path) -> TrainConfig:
+    """Rebuild a :class:`TrainConfig` from :func:`config_to_json` output (``path`` names it in errors)."""
+    try:
+        model = ModelConfig(**data.get("model", {}))
+        optim = OptimConfig(**data.get("optim", {}))
+        top = {k: v for k, v in data.items() if k not in ("model", "optim")}
+        for key in ("data", "out", "cache_dir"):
+            if top.get(key) is not None:
+                top[key] = Path(top[key])
+        return TrainConfig(**top, model=model, optim=optim)
+    except TypeError as exc:
+        raise input_error(path, f"not a training config of this version ({exc})") from None
+
+
+def read_config(path: Path) -> TrainConfig:
+    """Read a run's ``config.json``."""
+    path = Path(path)
+    if not path.is_file():
+        raise input_error(path, "file not found")
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise input_error(path, f"not valid JSON ({exc})") from None
+    return config_from_json(data, path)

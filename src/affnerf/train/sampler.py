@@ -1,0 +1,199 @@
+"""The paper's sampling rule: each step takes several objects; for each, one random view goes through the
+encoders and the rays are drawn from its OTHER views.
+
+Each rank of a distributed run walks its own slice of a per-epoch shuffle of the training objects, so ranks draw
+different objects; the walk and the random draws are plain state (epoch, position, generator state), saved in
+checkpoints so a resumed run continues with exactly the same data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+
+from affnerf.rendering.rays import pixel_rays
+from affnerf.train.cache import ObjectFrames
+
+@dataclass
+class RayBatch:
+    """One training step's data.
+
+    Attributes:
+        images: (B, 3, S, S) float encoder crops in [0, 1].
+        ray_object: (R,) index of each ray's object in ``images``.
+        origins: (R, 3) ray origins.
+        dirs: (R, 3) ray directions (unit length along the camera axis).
+        rgb: (R, 3) target colours in [0, 1].
+        labels: (R,) target affordance ids.
+        background: (R, 3) background colour behind each ray.
+        encoder_view: (B,) frame index of each object's encoded view.
+        ray_view: (R,) frame index each ray comes from.
+        object_ids: the B objects' dataset ids.
+    """
+
+    images: torch.Tensor
+    ray_object: torch.Tensor
+    origins: torch.Tensor
+    dirs: torch.Tensor
+    rgb: torch.Tensor
+    labels: torch.Tensor
+    background: torch.Tensor
+    encoder_view: torch.Tensor
+    ray_view: torch.Tensor
+    object_ids: list[str]
+
+    def to(self, device: torch.device | str) -> RayBatch:
+        """The batch with every tensor on ``device``."""
+        moved = {k: (v.to(device) if isinstance(v, torch.Tensor) else v) for k, v in self.__dict__.items()}
+        return RayBatch(**moved)
+
+
+def other_views(rng: np.random.Generator, num_views: int, excluded: int, count: int) -> np.ndarray:
+    """(count,) uniform frame indices in [0, num_views) that are never ``excluded``.
+
+    Example:
+        >>> set(other_views(np.random.default_rng(0), 3, 1, 100).tolist())
+        {0, 2}
+    """
+    views = rng.integers(0, num_views - 1, count)
+    return views + (views >= excluded)
+
+
+def draw_pixels(
+    rng: np.random.Generator, frames: ObjectFrames, views: np.ndarray, foreground: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel (u, v) per ray: uniform over the image, or uniform over the object's pixels where asked.
+
+    Args:
+        rng: random source.
+        frames: the object's cached frames (for the image size and each frame's object pixels).
+        views: (R,) frame of each ray.
+        foreground: (R,) bool, rays that should land on the object (a frame showing no object falls back to
+            uniform).
+
+    Returns:
+        u (R,), v (R,) integer pixel indices.
+    """
+    _, h, w = frames.labels.shape
+    flat = rng.integers(0, h * w, len(views))
+    start, stop = frames.fg_offsets[views], frames.fg_offsets[views + 1]
+    pick = foreground & (stop > start)
+    if pick.any():
+        k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
+        flat[pick] = frames.fg_pixels[k]
+    return flat % w, flat // w
+
+
+class RaySampler:
+    """Draws :class:`RayBatch` es following the paper's rule.
+
+    Args:
+        objects: the training objects' frames (each with at least two views).
+        objects_per_step: objects per step (per rank).
+        rays_per_step: rays per step (per rank), spread evenly over the objects.
+        foreground_fraction: share of rays drawn on the object rather than uniformly over the image.
+        seed: seed of the run.
+        rank: this process's rank.
+        world: number of processes.
+    """
+
+    def __init__(
+        self,
+        objects: list[ObjectFrames],
+        objects_per_step: int,
+        rays_per_step: int,
+        foreground_fraction: float,
+        seed: int,
+        rank: int = 0,
+        world: int = 1,
+    ) -> None:
+        if not objects:
+            raise ValueError("no training objects")
+        for o in objects:
+            if len(o) < 2:
+                raise ValueError(f"object {o.object_id} has {len(o)} view; the encoder needs another view than the rays'")
+        self.objects = objects
+        self.objects_per_step = objects_per_step
+        self.rays_per_step = rays_per_step
+        self.foreground_fraction = foreground_fraction
+        self.seed, self.rank, self.world = seed, rank, world
+        self.epoch, self.position = 0, 0
+        self.rng = np.random.default_rng([seed, rank, 17])
+        self._order = self._epoch_order(0)
+
+    def _epoch_order(self, epoch: int) -> np.ndarray:
+        """This rank's objects for ``epoch``: its slice of a shuffle shared by all ranks."""
+        perm = np.random.default_rng([self.seed, epoch, 29]).permutation(len(self.objects))
+        mine = perm[self.rank :: self.world]
+        return mine if len(mine) else perm[self.rank % len(perm) :: len(perm)]
+
+    def _next_objects(self) -> list[int]:
+        chosen = []
+        while len(chosen) < self.objects_per_step:
+            if self.position >= len(self._order):
+                self.epoch += 1
+                self.position = 0
+                self._order = self._epoch_order(self.epoch)
+            chosen.append(int(self._order[self.position]))
+            self.position += 1
+        return chosen
+
+    def next_batch(self) -> RayBatch:
+        """Draw one step's objects, encoder views and rays."""
+        chosen = self._next_objects()
+        counts = np.full(len(chosen), self.rays_per_step // len(chosen))
+        counts[: self.rays_per_step % len(chosen)] += 1
+        images, enc_views, parts = [], [], []
+        for slot, (oi, count) in enumerate(zip(chosen, counts)):
+            obj = self.objects[oi]
+            enc = int(self.rng.integers(0, len(obj)))
+            views = other_views(self.rng, len(obj), enc, int(count))
+            fg = self.rng.random(int(count)) < self.foreground_fraction
+            u, v = draw_pixels(self.rng, obj, views, fg)
+            images.append(np.asarray(obj.crops[enc]))
+            enc_views.append(enc)
+            parts.append((slot, obj, views, u, v))
+        return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything needed to continue the same sequence of batches."""
+        return {"epoch": self.epoch, "position": self.position, "rng": self.rng.bit_generator.state}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.epoch, self.position = int(state["epoch"]), int(state["position"])
+        self.rng.bit_generator.state = state["rng"]
+        self._order = self._epoch_order(self.epoch)
+
+
+def _assemble(images: list[np.ndarray], enc_views: list[int], parts: list[tuple], ids: list[str]) -> RayBatch:
+    ray_object, pix, views, poses, intr, rgb, labels, bg = [], [], [], [], [], [], [], []
+    for slot, obj, view, u, v in parts:
+        n = len(view)
+        ray_object.append(np.full(n, slot))
+        pix.append(np.stack([u, v], 1))
+        views.append(view)
+        poses.append(obj.poses[view])
+        intr.append(np.broadcast_to(obj.intrinsics, (n, 4)))
+        rgb.append(obj.rgb[view, v, u])
+        labels.append(obj.labels[view, v, u])
+        bg.append(np.broadcast_to(obj.background, (n, 3)))
+    origins, dirs = pixel_rays(
+        torch.from_numpy(np.concatenate(pix)),
+        torch.from_numpy(np.concatenate(intr)),
+        torch.from_numpy(np.concatenate(poses)),
+    )
+    return RayBatch(
+        images=torch.from_numpy(np.stack(images)).permute(0, 3, 1, 2).float() / 255.0,
+        ray_object=torch.from_numpy(np.concatenate(ray_object)).long(),
+        origins=origins.float(),
+        dirs=dirs.float(),
+        rgb=torch.from_numpy(np.concatenate(rgb)).float() / 255.0,
+        labels=torch.from_numpy(np.concatenate(labels)).long(),
+        background=torch.from_numpy(np.concatenate(bg)).float(),
+        encoder_view=torch.tensor(enc_views),
+        ray_view=torch.from_numpy(np.concatenate(views)).long(),
+        object_ids=ids,
+    )

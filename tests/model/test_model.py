@@ -1,0 +1,83 @@
+"""Encoders, positional encoding and the conditional field."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+from affnerf.model.affnerf import AffNeRF
+from affnerf.model.config import ModelConfig
+from affnerf.model.encoding import encoding_dim, positional_encoding
+from affnerf.model.field import ConditionalField
+from affnerf.model.resnet import CodeEncoder, ResNet18
+
+SMALL = ModelConfig(encoder_width=0.125, encoder_resolution=32, field_width=32, field_depth=4, num_coarse=8, num_fine=8,
+                    clip_to_cube=True, color_width=16, affordance_width=16)  # fmt: skip
+
+
+def test_resnet18_has_the_standard_layout():
+    net = ResNet18(1.0)
+    assert net.channels == [64, 128, 256, 512]
+    params = sum(p.numel() for p in net.parameters())
+    assert 11.0e6 < params < 11.3e6  # ResNet18 without its classifier: 11.18 M
+    feats = net(torch.rand(1, 3, 64, 64))
+    assert [f.shape[1:] for f in feats] == [(64, 16, 16), (128, 8, 8), (256, 4, 4), (512, 2, 2)]
+
+
+def test_an_image_encodes_the_same_alone_or_in_a_batch():
+    torch.manual_seed(0)
+    enc = CodeEncoder(32, 0.25).eval()
+    images = torch.rand(4, 3, 48, 48)
+    together = enc(images)
+    alone = torch.cat([enc(images[i : i + 1]) for i in range(4)])
+    torch.testing.assert_close(together, alone, atol=1e-5, rtol=1e-5)
+    assert together.shape == (4, 32)
+
+
+def test_positional_encoding_layout():
+    x = torch.tensor([[0.25, -0.5, 1.0]])
+    enc = positional_encoding(x, 3)
+    assert enc.shape == (1, encoding_dim(3, 3)) == (1, 21)
+    torch.testing.assert_close(enc[0, :3], x[0])
+    # frequency 2 (2^2 pi), sine of the first coordinate
+    assert math.isclose(enc[0, 3 + 2 * 6].item(), math.sin(4 * math.pi * 0.25), abs_tol=1e-6)
+
+
+def test_affordance_and_density_ignore_the_view_direction_and_appearance_code():
+    torch.manual_seed(0)
+    field = ConditionalField(num_classes=5, code_dim=8, width=32, depth=4, color_width=16, affordance_width=16)
+    pts = torch.rand(10, 3) - 0.5
+    shape = torch.randn(10, 8)
+    a = field(pts, torch.nn.functional.normalize(torch.randn(10, 3), dim=-1), shape, torch.randn(10, 8))
+    b = field(pts, torch.nn.functional.normalize(torch.randn(10, 3), dim=-1), shape, torch.randn(10, 8))
+    torch.testing.assert_close(a.logits, b.logits)
+    torch.testing.assert_close(a.sigma, b.sigma)
+    assert not torch.allclose(a.rgb, b.rgb)
+    assert a.logits.shape == (10, 4)  # object classes only; background comes from transmittance
+    assert torch.all(a.sigma >= 0) and torch.all((a.rgb >= 0) & (a.rgb <= 1))
+    sigma, logits = field.geometry(pts, shape)
+    torch.testing.assert_close(sigma, a.sigma)
+    torch.testing.assert_close(logits, a.logits)
+
+
+def test_the_shape_code_changes_the_geometry():
+    torch.manual_seed(1)
+    field = ConditionalField(num_classes=3, code_dim=8, width=32, depth=2)
+    pts = torch.rand(50, 3) - 0.5
+    assert not torch.allclose(field.density_only(pts, torch.zeros(50, 8)), field.density_only(pts, torch.ones(50, 8)))
+
+
+def test_rays_missing_the_cube_render_background_without_evaluation():
+    torch.manual_seed(0)
+    model = AffNeRF(SMALL, num_classes=4)
+    codes = model.encode(torch.rand(1, 3, 32, 32))
+    origins = torch.tensor([[0.0, 0.0, 0.8], [0.0, 0.8, 0.8]])
+    dirs = torch.tensor([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0]])  # the second passes beside the cube
+    bg = torch.tensor([[0.2, 0.3, 0.4]] * 2)
+    coarse, fine = model.render_rays(codes, torch.zeros(2, dtype=torch.long), origins, dirs, bg)
+    torch.testing.assert_close(fine.rgb[1], bg[1])
+    assert fine.opacity[1] == 0 and fine.affordance[1, 0] == 1
+    torch.testing.assert_close(fine.affordance.sum(-1), torch.ones(2))
+    assert fine.t.shape == (2, 16) and coarse.t.shape == (2, 8)
+    assert torch.all(fine.t[0] >= 0.55 - 1e-6) and torch.all(fine.t[0] <= 1.05 + 1e-6)  # inside the cube

@@ -1,0 +1,72 @@
+"""The paper's sampling rule and the data walk."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from affnerf.data.dataset import Dataset
+from affnerf.train.cache import ObjectFrames, cached_frames
+from affnerf.train.sampler import RaySampler, draw_pixels
+
+
+def _frames(train_dataset, tmp_path):
+    ds = Dataset.open(train_dataset)
+    return [cached_frames(ds.load_object(e), tmp_path, 1.0, 32) for e in ds.objects(split="train")]
+
+
+def test_the_encoded_view_is_never_a_target_view(train_dataset, tmp_path):
+    sampler = RaySampler(_frames(train_dataset, tmp_path), 2, 256, 0.5, seed=0)
+    for _ in range(30):
+        batch = sampler.next_batch()
+        enc = batch.encoder_view[batch.ray_object]
+        assert np.all((batch.ray_view != enc).numpy())
+        assert batch.images.shape == (2, 3, 32, 32) and batch.origins.shape == (256, 3)
+
+
+def test_rays_match_the_cached_pixels_and_foreground_share(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    sampler = RaySampler(frames, 2, 2000, 1.0, seed=1)
+    batch = sampler.next_batch()
+    on_object = (batch.labels > 0).float().mean().item()
+    assert on_object == 1.0  # every ray drawn on the object
+    uniform = RaySampler(frames, 2, 2000, 0.0, seed=1).next_batch()
+    assert (uniform.labels > 0).float().mean().item() < 0.5
+
+
+def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
+    labels = np.zeros((2, 5, 7), np.uint8)
+    labels[1, 2, 3] = 4
+    frames = ObjectFrames("toy", np.zeros((2, 5, 7, 3), np.uint8), labels, np.zeros((2, 4, 4, 3), np.uint8),
+                          np.array([0, 0, 1]), np.array([2 * 7 + 3], np.int32), np.tile(np.eye(4), (2, 1, 1)),
+                          np.ones(4), np.ones(3))  # fmt: skip
+    rng = np.random.default_rng(0)
+    u, v = draw_pixels(rng, frames, np.array([0, 1, 1, 1]), np.array([True, True, True, False]))
+    assert (u[1], v[1]) == (3, 2) and (u[2], v[2]) == (3, 2)
+    assert 0 <= u[0] < 7 and 0 <= v[0] < 5
+
+
+def test_each_epoch_visits_every_object_and_ranks_split_them(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    n = len(frames)
+    seen = []
+    sampler = RaySampler(frames, 1, 8, 0.5, seed=2)
+    for _ in range(n):
+        seen += sampler.next_batch().object_ids
+    assert sorted(seen) == sorted(f.object_id for f in frames)
+    ranks = [RaySampler(frames, 1, 8, 0.5, seed=2, rank=r, world=2) for r in range(2)]
+    first = [set(r.next_batch().object_ids) for r in ranks]
+    assert not (first[0] & first[1])
+
+
+def test_state_round_trip_continues_the_same_batches(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    a = RaySampler(frames, 2, 64, 0.5, seed=3)
+    for _ in range(5):
+        a.next_batch()
+    b = RaySampler(frames, 2, 64, 0.5, seed=3)
+    b.load_state_dict(a.state_dict())
+    for _ in range(7):
+        x, y = a.next_batch(), b.next_batch()
+        assert x.object_ids == y.object_ids
+        np.testing.assert_array_equal(x.origins.numpy(), y.origins.numpy())
+        np.testing.assert_array_equal(x.labels.numpy(), y.labels.numpy())

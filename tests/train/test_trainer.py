@@ -1,0 +1,123 @@
+"""Training behaviour: every parameter learns, losses fall, resuming is exact, bad checkpoints are refused."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import torch
+
+from affnerf.cli.main import main
+from affnerf.errors import AffnerfError
+from affnerf.model.affnerf import AffNeRF
+from affnerf.train.cache import cached_frames
+from affnerf.train.loss import nerf_loss
+from affnerf.train.sampler import RaySampler
+from affnerf.train.trainer import train
+from affnerf.data.dataset import Dataset
+
+
+def _metrics(run):
+    return [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
+
+
+def test_one_step_changes_every_parameter_group(train_dataset, tmp_path, tiny_train_config):
+    config = tiny_train_config()
+    ds = Dataset.open(train_dataset)
+    frames = [cached_frames(ds.load_object(e), tmp_path / "c", 1.0, 32) for e in ds.objects(split="train")]
+    torch.manual_seed(0)
+    model = AffNeRF(config.model, len(ds.affordance_classes))
+    before = {k: v.detach().clone() for k, v in model.named_parameters()}
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    batch = RaySampler(frames, 2, 256, 0.5, seed=0).next_batch()
+    coarse, fine = model(batch.images, batch.ray_object, batch.origins, batch.dirs, batch.background)
+    nerf_loss(coarse, fine, batch.rgb, batch.labels, 0.04).total.backward()
+    opt.step()
+    groups = {}
+    for name, param in model.named_parameters():
+        group = ".".join(name.split(".")[:2])
+        groups.setdefault(group, []).append(not torch.equal(param, before[name]))
+    unchanged = [g for g, changed in groups.items() if not all(changed)]
+    assert not unchanged, unchanged
+    assert {"shape_encoder.backbone", "appearance_encoder.backbone", "coarse.affordance", "fine.color"} <= set(groups)
+
+
+def test_fifty_steps_reduce_both_losses(tiny_train_config):
+    config = tiny_train_config(steps=50, checkpoint_every=50)
+    train(config)
+    rows = _metrics(config.out)
+    first, last = rows[:5], rows[-5:]
+    mse0, mse1 = np.mean([r["loss/mse"] for r in first]), np.mean([r["loss/mse"] for r in last])
+    ce0, ce1 = np.mean([r["loss/affordance_ce"] for r in first]), np.mean([r["loss/affordance_ce"] for r in last])
+    assert mse1 < 0.6 * mse0, (mse0, mse1)
+    assert ce1 < 0.6 * ce0, (ce0, ce1)
+
+
+def test_interrupted_and_resumed_run_ends_with_the_same_weights(tiny_train_config, tmp_path):
+    straight = tiny_train_config(out=tmp_path / "straight")
+    train(straight)
+    halves = tiny_train_config(out=tmp_path / "halves", stop_at=10)
+    train(halves)
+    assert sorted(p.name for p in (halves.out / "checkpoints").iterdir()) == ["step_00000010.pt"]
+    train(replace(halves, stop_at=0, resume=True))
+    a = torch.load(straight.out / "checkpoints" / "step_00000020.pt", weights_only=True)
+    b = torch.load(halves.out / "checkpoints" / "step_00000020.pt", weights_only=True)
+    for key in a["model"]:
+        assert torch.equal(a["model"][key], b["model"][key]), key
+    assert a["optimizer"]["state"][0]["step"] == b["optimizer"]["state"][0]["step"]
+
+
+def test_existing_run_needs_resume_and_keeps_its_checkpoints(tiny_train_config):
+    config = tiny_train_config(steps=10)
+    train(config)
+    with pytest.raises(AffnerfError, match="already holds a run"):
+        train(config)
+    assert (config.out / "checkpoints" / "step_00000010.pt").is_file()
+
+
+def _cli(config, *extra):
+    return [
+        "train", "--data", str(config.data), "--out", str(config.out), "--config", "small", "--steps", "10",
+        "--model.encoder-width", "0.125", "--model.encoder-resolution", "32", "--model.field-width", "32",
+        "--model.field-depth", "2", "--model.color-width", "16", "--model.affordance-width", "16",
+        "--model.num-coarse", "8", "--model.num-fine", "8", "--rays-per-step", "64", "--objects-per-step", "2",
+        "--checkpoint-every", "5", "--val-every", "0", "--no-progress", "--device", "cpu",
+        "--cache-dir", str(config.cache_dir), *extra,
+    ]  # fmt: skip
+
+
+def test_checkpoint_of_another_configuration_is_a_clear_error(tiny_train_config, capsys):
+    config = tiny_train_config()
+    assert main(_cli(config)) == 0
+    capsys.readouterr()
+    args = _cli(config, "--steps", "20", "--resume")
+    args[args.index("--model.field-width") + 1] = "48"
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0
+    assert "step_00000010.pt: checkpoint is from another configuration (field_width 32 vs 48)" in err
+
+
+def test_corrupt_checkpoint_is_a_clear_error(tiny_train_config, capsys):
+    config = tiny_train_config()
+    assert main(_cli(config)) == 0
+    capsys.readouterr()
+    last = config.out / "checkpoints" / "step_00000010.pt"
+    last.write_bytes(last.read_bytes()[:1000])
+    assert main(_cli(config, "--steps", "20", "--resume")) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "step_00000010.pt: not a readable checkpoint" in err
+
+
+def test_run_folder_reproduces_its_config(tiny_train_config, tmp_path, capsys):
+    config = tiny_train_config()
+    assert main(_cli(config)) == 0
+    again = tmp_path / "again"
+    assert main(["train", "--config-file", str(config.out / "config.json"), "--out", str(again)]) == 0
+    a, b = json.loads((config.out / "config.json").read_text()), json.loads((again / "config.json").read_text())
+    assert {k: v for k, v in a.items() if k != "out"} == {k: v for k, v in b.items() if k != "out"}
+    wa = torch.load(config.out / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
+    wb = torch.load(again / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
+    assert all(torch.equal(wa[k], wb[k]) for k in wa)
