@@ -22,7 +22,7 @@ from pathlib import Path
 from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
 from affnerf.data.generate import GenerateConfig, generate_dataset
-from affnerf.eval.methods.affnerf import AffNeRFMethod
+from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.methods.constant import ConstantMethod
 from affnerf.eval.protocol import ProtocolConfig, evaluate
 from affnerf.predict.loading import load_model
@@ -49,7 +49,7 @@ def dataset(root: Path) -> Path:
 def score(run: Path, data: Path) -> dict:
     ds = Dataset.open(data)
     objects = [ds.load_object(e) for e in ds.objects(split="val")]
-    result = evaluate(AffNeRFMethod(load_model(run)), objects, PROTOCOL, "val", len(ds.affordance_classes))
+    result = evaluate(ConditionedNeRFMethod(load_model(run)), objects, PROTOCOL, "val", len(ds.affordance_classes))
     return result.to_json()["mean"]
 
 

@@ -1,12 +1,15 @@
-"""Shared test fixtures."""
+"""Shared test fixtures: tiny datasets, a tiny training configuration, tiny trained runs."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from affnerf.data.generate import GenerateConfig, generate_dataset
+from affnerf.model.config import ModelConfig
+from affnerf.train.config import SMALL, TrainConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 #: Real PartNet-Mobility objects for development, beside the checkout (never copied into the repo).
@@ -38,3 +41,73 @@ def tiny_dataset(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("tiny") / "ds"
     generate_dataset(_tiny_config(root), progress=False)
     return root
+
+
+#: A model small enough to train for a few steps in a test.
+TINY_MODEL = ModelConfig(
+    encoder_width=0.125,
+    encoder_resolution=32,
+    field_width=32,
+    field_depth=2,
+    color_width=16,
+    affordance_width=16,
+    pe_xyz=6,
+    pe_dir=2,
+    num_coarse=16,
+    num_fine=16,
+    clip_to_cube=True,
+)
+
+
+@pytest.fixture(scope="session")
+def train_dataset(tmp_path_factory) -> Path:
+    """Three screwdrivers and three bottles (one each in train, val and test), 8 views of 40x30."""
+    root = tmp_path_factory.mktemp("train") / "ds"
+    generate_dataset(
+        GenerateConfig(out=root, categories="screwdriver,bottle", objects_per_category=3, views=8, width=40, height=30, seed=1),
+        progress=False,
+    )
+    return root
+
+
+@pytest.fixture
+def tiny_train_config(train_dataset, tmp_path):
+    """Make a tiny training config writing to a fresh run folder; keyword overrides apply."""
+
+    def make(**overrides) -> TrainConfig:
+        base = replace(
+            SMALL,
+            data=train_dataset,
+            out=tmp_path / "run",
+            steps=20,
+            model=TINY_MODEL,
+            rays_per_step=128,
+            objects_per_step=2,
+            checkpoint_every=10,
+            log_every=1,
+            val_every=0,
+            progress=False,
+            device="cpu",
+            cache_dir=tmp_path / "cache",
+        )
+        return replace(base, **overrides)
+
+    return make
+
+
+@pytest.fixture(scope="session")
+def trained_runs(train_dataset, tmp_path_factory) -> dict[str, Path]:
+    """A tiny AFF-NeRF run and a tiny PixelNeRF-M run (3 input views), each trained for a few steps."""
+    from affnerf.train.trainer import train
+
+    root = tmp_path_factory.mktemp("runs")
+    runs = {}
+    for kind, views in (("affnerf", 1), ("pixelnerf", 3)):
+        config = replace(
+            SMALL, data=train_dataset, out=root / kind, steps=30, model=replace(TINY_MODEL, kind=kind), rays_per_step=128,
+            objects_per_step=2, input_views=views, checkpoint_every=30, log_every=10, val_every=0, progress=False,
+            device="cpu", cache_dir=root / f"cache-{kind}",
+        )  # fmt: skip
+        train(config)
+        runs[kind] = config.out
+    return runs

@@ -18,9 +18,20 @@ def test_the_encoded_view_is_never_a_target_view(train_dataset, tmp_path):
     sampler = RaySampler(_frames(train_dataset, tmp_path), 2, 256, 0.5, seed=0)
     for _ in range(30):
         batch = sampler.next_batch()
-        enc = batch.encoder_view[batch.ray_object]
+        enc = batch.encoder_view[batch.ray_object, 0]
         assert np.all((batch.ray_view != enc).numpy())
-        assert batch.images.shape == (2, 3, 32, 32) and batch.origins.shape == (256, 3)
+        assert batch.images.shape == (2, 1, 3, 32, 32) and batch.origins.shape == (256, 3)
+
+
+def test_several_encoded_views_are_distinct_and_never_targets(train_dataset, tmp_path):
+    sampler = RaySampler(_frames(train_dataset, tmp_path), 2, 256, 0.5, seed=0, input_views=3)
+    for _ in range(10):
+        batch = sampler.next_batch()
+        assert batch.images.shape == (2, 3, 3, 32, 32) and batch.input_poses.shape == (2, 3, 4, 4)
+        for b in range(2):
+            enc = set(batch.encoder_view[b].tolist())
+            assert len(enc) == 3
+            assert not enc & set(batch.ray_view[batch.ray_object == b].tolist())
 
 
 def test_rays_match_the_cached_pixels_and_foreground_share(train_dataset, tmp_path):
@@ -37,8 +48,8 @@ def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
     labels = np.zeros((2, 5, 7), np.uint8)
     labels[1, 2, 3] = 4
     frames = ObjectFrames("toy", np.zeros((2, 5, 7, 3), np.uint8), labels, np.zeros((2, 4, 4, 3), np.uint8),
-                          np.array([0, 0, 1]), np.array([2 * 7 + 3], np.int32), np.tile(np.eye(4), (2, 1, 1)),
-                          np.ones(4), np.ones(3))  # fmt: skip
+                          np.zeros((2, 4)), np.array([0, 0, 1]), np.array([2 * 7 + 3], np.int32),
+                          np.tile(np.eye(4), (2, 1, 1)), np.ones(4), np.ones(3))  # fmt: skip
     rng = np.random.default_rng(0)
     u, v = draw_pixels(rng, frames, np.array([0, 1, 1, 1]), np.array([True, True, True, False]))
     assert (u[1], v[1]) == (3, 2) and (u[2], v[2]) == (3, 2)

@@ -17,12 +17,16 @@ from affnerf.errors import AffnerfError
 
 def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     """The command tree (``args`` lets ``train`` take its defaults from the preset they name)."""
-    from affnerf.cli import data, demo
+    from affnerf.cli import data, demo, evaluate
+    from affnerf.cli.predict import predict
     from affnerf.cli.train import make_train_command
 
     app = SubcommandApp()
     app.command(data.app, name="data", help="Generate, import, index, preview and summarise datasets.")
     app.command(make_train_command(args), name="train")
+    app.command(predict, name="predict")
+    app.command(evaluate.app, name="eval", help="Evaluate like the paper's Table 2 (and, with `eval grasp`, Table 3).")
+    app.command(evaluate.metrics, name="metrics")
     app.command(demo.demo, name="demo", help="Run the whole pipeline at a small scale on this machine.")
     return app
 

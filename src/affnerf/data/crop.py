@@ -35,6 +35,28 @@ def square_box(bbox: tuple[int, int, int, int], margin: float = CROP_MARGIN) -> 
     return (x0 + x1) / 2.0, (y0 + y1) / 2.0, max(side, 1.0)
 
 
+def crop_window(mask: np.ndarray, margin: float = CROP_MARGIN) -> tuple[int, int, int]:
+    """(left, top, side) in whole pixels of the square cut out around the object (the image's centre square
+    when the mask is empty); it may reach outside the image."""
+    h, w = mask.shape
+    bbox = object_bbox(mask)
+    cx, cy, side = square_box(bbox, margin) if bbox else (w / 2.0, h / 2.0, float(min(h, w)))
+    return int(np.floor(cx - side / 2.0)), int(np.floor(cy - side / 2.0)), int(np.ceil(side))
+
+
+def crop_intrinsics(
+    fl_x: float, fl_y: float, cx: float, cy: float, window: tuple[int, int, int], size: int
+) -> tuple[float, float, float, float]:
+    """The pinhole intrinsics of a crop: the image's, shifted to the window and scaled to ``size`` pixels.
+
+    Example:
+        >>> crop_intrinsics(100.0, 100.0, 50.0, 40.0, (10, 0, 80), 40)
+        (50.0, 50.0, 20.0, 20.0)
+    """
+    scale = size / window[2]
+    return fl_x * scale, fl_y * scale, (cx - window[0]) * scale, (cy - window[1]) * scale
+
+
 def crop_object(
     rgb: np.ndarray,
     mask: np.ndarray,
@@ -53,15 +75,11 @@ def crop_object(
         margin: see :func:`square_box`.
 
     Returns:
-        (size, size, 3) uint8; the whole image's centre square when the mask is empty.
+        (size, size, 3) uint8, the window of :func:`crop_window` resized.
     """
-    h, w = mask.shape
     bg = np.round(np.asarray(background, np.float64) * 255).astype(np.uint8)
     clean = np.where(mask[..., None], rgb, bg)
-    bbox = object_bbox(mask)
-    cx, cy, side = square_box(bbox, margin) if bbox else (w / 2.0, h / 2.0, float(min(h, w)))
-    left, top = int(np.floor(cx - side / 2.0)), int(np.floor(cy - side / 2.0))
-    s = int(np.ceil(side))
-    canvas = Image.new("RGB", (s, s), tuple(int(c) for c in bg))
+    left, top, side = crop_window(mask, margin)
+    canvas = Image.new("RGB", (side, side), tuple(int(c) for c in bg))
     canvas.paste(Image.fromarray(np.ascontiguousarray(clean)), (-left, -top))
     return np.array(canvas.resize((size, size), Image.BILINEAR))

@@ -33,7 +33,8 @@ def write_labels(path: Path, labels: np.ndarray) -> None:
     Image.fromarray(np.ascontiguousarray(labels, dtype=np.uint8), "L").save(path, compress_level=PNG_COMPRESS_LEVEL)
 
 
-def _open(path: Path) -> Image.Image:
+def open_image(path: Path) -> Image.Image:
+    """Open and fully decode an image, reporting a missing, corrupt or empty file as one line."""
     path = Path(path)
     if not path.is_file():
         raise input_error(path, "file not found")
@@ -73,12 +74,12 @@ def read_rgb(path: Path, size: tuple[int, int] | None = None) -> np.ndarray:
         path: the image file.
         size: expected (width, height), checked when given.
     """
-    return _check_size(path, to_rgb8(_open(path)), size)
+    return _check_size(path, to_rgb8(open_image(path)), size)
 
 
 def read_depth(path: Path, unit: float = 0.001, size: tuple[int, int] | None = None) -> np.ndarray:
     """Read a 16-bit depth PNG as (H, W) float32 metres (0 = no surface)."""
-    image = _open(path)
+    image = open_image(path)
     if image.mode not in ("I;16", "I;16B", "I;16L", "I", "L"):
         raise input_error(path, f"depth image has mode {image.mode}, expected 16-bit greyscale")
     return _check_size(path, np.asarray(image, dtype=np.float64).astype(np.float32) * np.float32(unit), size)
@@ -92,7 +93,7 @@ def read_labels(path: Path, num_ids: int | None = None, size: tuple[int, int] | 
         num_ids: when given, every id must be below it (e.g. the number of affordance classes).
         size: expected (width, height), checked when given.
     """
-    image = _open(path)
+    image = open_image(path)
     if image.mode not in ("L", "P"):
         raise input_error(path, f"label image has mode {image.mode}, expected 8-bit greyscale ids")
     labels = np.asarray(image, dtype=np.uint8)  # a palette image's indices are the ids

@@ -19,7 +19,7 @@ from affnerf.data.cameras import Intrinsics
 from affnerf.data.format import FrameRecord, IndexEntry, ObjectRecord, PartRecord, write_json_atomic
 from affnerf.data.images import write_depth, write_labels, write_rgb
 from affnerf.meshio import LabelledMesh, write_labelled_ply
-from affnerf.objects.asset import ObjectAsset, SurfaceMesh, merge_parts
+from affnerf.objects.asset import Material, ObjectAsset, SurfaceMesh, merge_parts
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 PARTIAL_DIR = ".partial"
@@ -52,6 +52,23 @@ def surface_mesh_record(surface: SurfaceMesh) -> LabelledMesh:
         vertex_props={"part": surface.vertex_part, "affordance": surface.vertex_affordance},
         face_props={"part": surface.face_part, "affordance": surface.face_affordance},
         vertex_colors=vertex_rgb,
+    )
+
+
+def surface_from_record(mesh: LabelledMesh) -> SurfaceMesh:
+    """The renderable surface of a ground-truth ``mesh.ply`` (the inverse of :func:`surface_mesh_record`, with
+    each face in its first vertex's colour)."""
+    face_rgb = mesh.vertex_colors[mesh.faces[:, 0]] if mesh.vertex_colors is not None else np.full((len(mesh.faces), 3), 180)
+    colors, face_material = np.unique(face_rgb, axis=0, return_inverse=True)
+    n = len(mesh.faces)
+    return SurfaceMesh(
+        vertices=np.asarray(mesh.vertices, np.float64),
+        faces=np.asarray(mesh.faces, np.int64),
+        face_part=np.asarray(mesh.face_props.get("part", np.ones(n)), np.uint8),
+        face_affordance=np.asarray(mesh.face_props["affordance"], np.uint8),
+        face_material=face_material.reshape(-1).astype(np.int32),
+        face_uv=np.zeros((n, 3, 2), np.float32),
+        materials=[Material(tuple(float(c) / 255.0 for c in rgb)) for rgb in colors],  # type: ignore[misc]
     )
 
 

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """AFF-NeRF architecture and ray sampling.
+    """Architecture and ray sampling.
 
     Attributes:
+        kind: ``affnerf`` (global shape and appearance codes, GUIDE 4) or ``pixelnerf`` (the PixelNeRF-M
+            baseline: pixel-aligned features projected with the input cameras).
         code_dim: size of the shape code and of the appearance code.
         encoder_width: channel multiplier of the two ResNet18 encoders (1.0 = standard ResNet18).
         encoder_resolution: side of the square object crop the encoders see, pixels.
@@ -27,6 +30,7 @@ class ModelConfig:
             background without evaluating the field); False samples the whole [near, far] like vanilla NeRF.
     """
 
+    kind: Literal["affnerf", "pixelnerf"] = "affnerf"
     code_dim: int = 32
     encoder_width: float = 1.0
     encoder_resolution: int = 224

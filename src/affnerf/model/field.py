@@ -43,6 +43,7 @@ class ConditionalField(nn.Module):
         affordance_width: hidden width of the affordance head.
         pe_xyz: positional-encoding frequencies of positions.
         pe_dir: positional-encoding frequencies of view directions.
+        color_code_dim: size of the conditioning the colour head takes (default: ``code_dim``).
     """
 
     def __init__(
@@ -55,8 +56,10 @@ class ConditionalField(nn.Module):
         affordance_width: int = 128,
         pe_xyz: int = 10,
         pe_dir: int = 4,
+        color_code_dim: int | None = None,
     ) -> None:
         super().__init__()
+        color_code_dim = code_dim if color_code_dim is None else color_code_dim
         self.pe_xyz, self.pe_dir = pe_xyz, pe_dir
         in_dim = encoding_dim(3, pe_xyz) + code_dim
         self.skip = depth // 2
@@ -69,7 +72,7 @@ class ConditionalField(nn.Module):
         self.feature = nn.Linear(width, width)
         self.affordance = nn.Sequential(nn.Linear(width, affordance_width), nn.ReLU(), nn.Linear(affordance_width, num_classes - 1))
         self.color = nn.Sequential(
-            nn.Linear(width + encoding_dim(3, pe_dir) + code_dim, color_width), nn.ReLU(), nn.Linear(color_width, 3)
+            nn.Linear(width + encoding_dim(3, pe_dir) + color_code_dim, color_width), nn.ReLU(), nn.Linear(color_width, 3)
         )
 
     def trunk(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:

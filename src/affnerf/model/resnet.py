@@ -42,11 +42,12 @@ class ResNet18(nn.Module):
 
     Args:
         width: channel multiplier; 1.0 gives the standard 64-128-256-512 channels.
+        stages: how many of the four stages to build (feature extractors that stop early need fewer).
     """
 
-    def __init__(self, width: float = 1.0) -> None:
+    def __init__(self, width: float = 1.0, stages: int = 4) -> None:
         super().__init__()
-        chans = [max(8, int(round(c * width))) for c in (64, 128, 256, 512)]
+        chans = [max(8, int(round(c * width))) for c in (64, 128, 256, 512)][:stages]
         self.channels = chans
         self.stem = nn.Sequential(
             nn.Conv2d(3, chans[0], 7, 2, 3, bias=False), group_norm(chans[0]), nn.ReLU(), nn.MaxPool2d(3, 2, 1)
@@ -63,7 +64,7 @@ class ResNet18(nn.Module):
                 nn.init.kaiming_normal_(m.weight, mode="fan_out", nonlinearity="relu")
 
     def forward(self, images: torch.Tensor) -> list[torch.Tensor]:
-        """Feature maps after each of the four stages: [(B, C_i, H / 2^(i+2), W / 2^(i+2))]."""
+        """Feature maps after each stage: [(B, C_i, H / 2^(i+2), W / 2^(i+2))]."""
         x = self.stem(images * 2.0 - 1.0)
         feats = []
         for layer in self.layers:

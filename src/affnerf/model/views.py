@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import torch
 
 from affnerf.data.cameras import Intrinsics
-from affnerf.model.affnerf import AffNeRF, Codes
+from affnerf.model.affnerf import Codes
+from affnerf.model.base import ConditionedNeRF
 from affnerf.rendering.rays import pixel_rays
 
 
@@ -34,15 +36,10 @@ class RenderedView:
         return self.affordance.argmax(axis=-1).astype(np.uint8)
 
 
-def select_codes(codes: Codes, index: int) -> Codes:
-    """The codes of one object, kept (1, code_dim)."""
-    return Codes(codes.shape[index : index + 1], codes.appearance[index : index + 1])
-
-
 @torch.no_grad()
 def render_view(
-    model: AffNeRF,
-    codes: Codes,
+    model: ConditionedNeRF,
+    encoding: Codes | Any,
     intrinsics: Intrinsics,
     c2w: np.ndarray,
     background: tuple[float, float, float] | np.ndarray = (1.0, 1.0, 1.0),
@@ -52,7 +49,7 @@ def render_view(
 
     Args:
         model: the trained model (evaluation mode is the caller's business).
-        codes: the object's codes, (1, code_dim) each.
+        encoding: the object's encoding (``model.encode_views`` of one object; AFF-NeRF's codes).
         intrinsics: the camera.
         c2w: (4, 4) camera-to-world pose in the canonical frame.
         background: RGB in [0, 1].
@@ -70,7 +67,7 @@ def render_view(
         o = origins[start : start + chunk].float().to(device)
         d = dirs[start : start + chunk].float().to(device)
         n = o.shape[0]
-        coarse, fine = model.render_rays(codes, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
+        coarse, fine = model.render_rays(encoding, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
         out = fine if fine is not None else coarse
         rgb.append(out.rgb.cpu())
         opacity.append(out.opacity.cpu())

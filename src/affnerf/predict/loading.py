@@ -8,7 +8,8 @@ from pathlib import Path
 import torch
 
 from affnerf.errors import input_error
-from affnerf.model.affnerf import AffNeRF
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.factory import build_model
 from affnerf.model.config import ModelConfig
 from affnerf.train.checkpoint import list_checkpoints, load_checkpoint
 
@@ -23,13 +24,15 @@ class LoadedModel:
         step: the training step of the checkpoint.
         path: the checkpoint file.
         train_config: the run's resolved training config (JSON form).
+        background: the background colour of the training images (RGB in [0, 1]).
     """
 
-    model: AffNeRF
+    model: ConditionedNeRF
     classes: list[str]
     step: int
     path: Path
     train_config: dict
+    background: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     @property
     def device(self) -> torch.device:
@@ -60,9 +63,12 @@ def load_model(path: Path, device: str | torch.device = "cpu") -> LoadedModel:
     data = load_checkpoint(ckpt)
     try:
         config = ModelConfig(**data["model_config"])
-        model = AffNeRF(config, int(data["num_classes"]))
+        model = build_model(config, int(data["num_classes"]))
         model.load_state_dict(data["model"])
     except (KeyError, TypeError, RuntimeError) as exc:
         raise input_error(ckpt, f"checkpoint does not match this version's model ({' '.join(str(exc).split())[:200]})") from None
     model.to(device).eval()
-    return LoadedModel(model, list(data["affordance_classes"]), int(data["step"]), ckpt, data.get("train_config", {}))
+    background = tuple(float(c) for c in data.get("background", (1.0, 1.0, 1.0)))
+    return LoadedModel(
+        model, list(data["affordance_classes"]), int(data["step"]), ckpt, data.get("train_config", {}), background
+    )

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from affnerf.data.crop import crop_object
+from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
 from affnerf.data.dataset import ObjectData
 
 
@@ -33,6 +33,7 @@ class ObjectFrames:
         rgb: (N, H, W, 3) uint8.
         labels: (N, H, W) uint8 affordance ids.
         crops: (N, S, S, 3) uint8 encoder crops.
+        crop_intrinsics: (N, 4) fl_x, fl_y, cx, cy of each crop (for pixel-aligned baselines).
         fg_offsets: (N + 1,) start of each frame's object pixels in ``fg_pixels``.
         fg_pixels: (M,) flat pixel indices (v * W + u) of the object's pixels, frame after frame.
         poses: (N, 4, 4) float64 camera-to-world.
@@ -44,6 +45,7 @@ class ObjectFrames:
     rgb: np.ndarray
     labels: np.ndarray
     crops: np.ndarray
+    crop_intrinsics: np.ndarray
     fg_offsets: np.ndarray
     fg_pixels: np.ndarray
     poses: np.ndarray
@@ -54,9 +56,39 @@ class ObjectFrames:
         return len(self.poses)
 
 
+#: Bumped when the cache's layout changes, so older caches are rebuilt.
+CACHE_VERSION = 2
+
+
 def _signature(obj: ObjectData, scale: float, crop: int) -> str:
     digest = hashlib.sha1((obj.folder / "transforms.json").read_bytes()).hexdigest()[:16]
-    return f"{digest}-{scale:g}-{crop}"
+    return f"v{CACHE_VERSION}-{digest}-{scale:g}-{crop}"
+
+
+def foreground_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (N + 1,) and flat pixel indices (M,) of the object pixels of (N, H, W) label maps."""
+    fg = [np.flatnonzero(labels[i].reshape(-1) > 0).astype(np.int32) for i in range(len(labels))]
+    offsets = np.concatenate([[0], np.cumsum([len(f) for f in fg])]).astype(np.int64)
+    return offsets, (np.concatenate(fg) if fg else np.zeros(0, np.int32))
+
+
+def frames_from_arrays(
+    object_id: str,
+    rgb: np.ndarray,
+    labels: np.ndarray,
+    poses: np.ndarray,
+    intrinsics: np.ndarray,
+    background: np.ndarray,
+) -> ObjectFrames:
+    """Frames held in memory (for fitting a per-object field), without encoder crops.
+
+    Args:
+        rgb: (N, H, W, 3) uint8; labels: (N, H, W) uint8; poses: (N, 4, 4); intrinsics: (4,); background: (3,).
+    """
+    offsets, pixels = foreground_index(labels)
+    n = len(rgb)
+    return ObjectFrames(object_id, rgb, labels, np.zeros((n, 1, 1, 3), np.uint8), np.zeros((n, 4)), offsets, pixels,
+                        np.asarray(poses, np.float64), np.asarray(intrinsics, np.float64), np.asarray(background, np.float64))  # fmt: skip
 
 
 def _resize(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarray:
@@ -77,22 +109,27 @@ def build_frames(obj: ObjectData, folder: Path, scale: float, crop_size: int) ->
         labels = np.lib.format.open_memmap(tmp / "labels.npy", "w+", np.uint8, (n, size[1], size[0]))
         crops = np.lib.format.open_memmap(tmp / "crops.npy", "w+", np.uint8, (n, crop_size, crop_size, 3))
         background = obj.record.background_color
+        full = obj.record.intrinsics
+        crop_k = []
         for i in range(n):
             full_rgb, full_aff = obj.rgb(i), obj.affordance(i)
             crops[i] = crop_object(full_rgb, full_aff > 0, crop_size, background)
+            window = crop_window(full_aff > 0)
+            crop_k.append(crop_intrinsics(full.fl_x, full.fl_y, full.cx, full.cy, window, crop_size))
             rgb[i] = _resize(full_rgb, size, nearest=False)
             labels[i] = _resize(full_aff, size, nearest=True)
         for array in (rgb, labels, crops):
             array.flush()
-        fg = [np.flatnonzero(labels[i].reshape(-1) > 0).astype(np.int32) for i in range(n)]
-        np.save(tmp / "fg_offsets.npy", np.concatenate([[0], np.cumsum([len(f) for f in fg])]).astype(np.int64))
-        np.save(tmp / "fg_pixels.npy", np.concatenate(fg) if fg else np.zeros(0, np.int32))
+        offsets, pixels = foreground_index(labels)
+        np.save(tmp / "fg_offsets.npy", offsets)
+        np.save(tmp / "fg_pixels.npy", pixels)
         del rgb, labels, crops
         meta = {
             "signature": _signature(obj, scale, crop_size),
             "object_id": obj.record.object_id,
             "poses": obj.poses.tolist(),
             "intrinsics": [intr.fl_x, intr.fl_y, intr.cx, intr.cy],
+            "crop_intrinsics": crop_k,
             "background": list(background),
         }
         (tmp / "meta.json").write_text(json.dumps(meta))
@@ -112,6 +149,7 @@ def load_frames(folder: Path) -> ObjectFrames:
         rgb=np.load(folder / "rgb.npy", mmap_mode="r"),
         labels=np.load(folder / "labels.npy", mmap_mode="r"),
         crops=np.load(folder / "crops.npy", mmap_mode="r"),
+        crop_intrinsics=np.asarray(meta["crop_intrinsics"], np.float64),
         fg_offsets=np.load(folder / "fg_offsets.npy"),
         fg_pixels=np.load(folder / "fg_pixels.npy", mmap_mode="r"),
         poses=np.asarray(meta["poses"], np.float64),

@@ -84,7 +84,8 @@ def check_compatible(data: dict[str, Any], model: ModelConfig, num_classes: int,
     saved = data.get("model_config", {})
     ours = dataclasses.asdict(model)
     arch_keys = [k for k in ours if k not in ("num_coarse", "num_fine", "near", "far", "clip_to_cube")]
-    diff = [f"{k} {saved.get(k)!r} vs {ours[k]!r}" for k in arch_keys if saved.get(k) != ours[k]]
+    diff = [f"{k} {saved.get(k, 'affnerf' if k == 'kind' else None)!r} vs {ours[k]!r}" for k in arch_keys
+            if saved.get(k, "affnerf" if k == "kind" else None) != ours[k]]  # fmt: skip
     if diff:
         raise input_error(path, f"checkpoint is from another configuration ({'; '.join(diff)})")
     if data.get("num_classes") != num_classes:

@@ -46,6 +46,7 @@ class TrainConfig:
         model: architecture and ray sampling.
         optim: optimiser and learning-rate schedule.
         objects_per_step: objects per step and per process (each with its own encoded view).
+        input_views: views encoded per object (1 for AFF-NeRF; 3 for the multi-view PixelNeRF baseline).
         rays_per_step: rays per step and per process.
         foreground_fraction: share of rays drawn on the object (the rest uniform over the image).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
@@ -76,6 +77,7 @@ class TrainConfig:
     model: ModelConfig = field(default_factory=ModelConfig)
     optim: OptimConfig = field(default_factory=OptimConfig)
     objects_per_step: int = 4
+    input_views: int = 1
     rays_per_step: int = 1024
     foreground_fraction: float = 0.5
     affordance_weight: float = 4e-4

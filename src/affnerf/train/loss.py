@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import torch
 
-from affnerf.model.affnerf import RayOutputs
+from affnerf.model.raymarch import RayOutputs
 
 
 def affordance_nll(probs: torch.Tensor, labels: torch.Tensor, eps: float = 1e-7) -> torch.Tensor:

@@ -1,5 +1,6 @@
 """The paper's sampling rule: each step takes several objects; for each, one random view goes through the
-encoders and the rays are drawn from its OTHER views.
+encoders and the rays are drawn from its OTHER views (with ``input_views`` > 1, for multi-view baselines,
+several distinct views are encoded and the rays come from the rest).
 
 Each rank of a distributed run walks its own slice of a per-epoch shuffle of the training objects, so ranks draw
 different objects; the walk and the random draws are plain state (epoch, position, generator state), saved in
@@ -22,19 +23,23 @@ class RayBatch:
     """One training step's data.
 
     Attributes:
-        images: (B, 3, S, S) float encoder crops in [0, 1].
+        images: (B, V, 3, S, S) float encoder crops in [0, 1].
+        input_intrinsics: (B, V, 4) the crops' fl_x, fl_y, cx, cy.
+        input_poses: (B, V, 4, 4) the encoded views' camera-to-world poses.
         ray_object: (R,) index of each ray's object in ``images``.
         origins: (R, 3) ray origins.
         dirs: (R, 3) ray directions (unit length along the camera axis).
         rgb: (R, 3) target colours in [0, 1].
         labels: (R,) target affordance ids.
         background: (R, 3) background colour behind each ray.
-        encoder_view: (B,) frame index of each object's encoded view.
+        encoder_view: (B, V) frame indices of each object's encoded views.
         ray_view: (R,) frame index each ray comes from.
         object_ids: the B objects' dataset ids.
     """
 
     images: torch.Tensor
+    input_intrinsics: torch.Tensor
+    input_poses: torch.Tensor
     ray_object: torch.Tensor
     origins: torch.Tensor
     dirs: torch.Tensor
@@ -51,15 +56,15 @@ class RayBatch:
         return RayBatch(**moved)
 
 
-def other_views(rng: np.random.Generator, num_views: int, excluded: int, count: int) -> np.ndarray:
-    """(count,) uniform frame indices in [0, num_views) that are never ``excluded``.
+def other_views(rng: np.random.Generator, num_views: int, excluded: np.ndarray, count: int) -> np.ndarray:
+    """(count,) uniform frame indices in [0, num_views) that are never among ``excluded``.
 
     Example:
-        >>> set(other_views(np.random.default_rng(0), 3, 1, 100).tolist())
-        {0, 2}
+        >>> set(other_views(np.random.default_rng(0), 4, np.array([1, 2]), 100).tolist())
+        {0, 3}
     """
-    views = rng.integers(0, num_views - 1, count)
-    return views + (views >= excluded)
+    allowed = np.setdiff1d(np.arange(num_views), excluded)
+    return allowed[rng.integers(0, len(allowed), count)]
 
 
 def draw_pixels(
@@ -96,6 +101,7 @@ class RaySampler:
         rays_per_step: rays per step (per rank), spread evenly over the objects.
         foreground_fraction: share of rays drawn on the object rather than uniformly over the image.
         seed: seed of the run.
+        input_views: views encoded per object (1 for AFF-NeRF).
         rank: this process's rank.
         world: number of processes.
     """
@@ -109,12 +115,16 @@ class RaySampler:
         seed: int,
         rank: int = 0,
         world: int = 1,
+        input_views: int = 1,
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
         for o in objects:
-            if len(o) < 2:
-                raise ValueError(f"object {o.object_id} has {len(o)} view; the encoder needs another view than the rays'")
+            if len(o) < input_views + 1:
+                raise ValueError(
+                    f"object {o.object_id} has {len(o)} views; {input_views} encoded and at least one for rays are needed"
+                )
+        self.input_views = input_views
         self.objects = objects
         self.objects_per_step = objects_per_step
         self.rays_per_step = rays_per_step
@@ -149,11 +159,11 @@ class RaySampler:
         images, enc_views, parts = [], [], []
         for slot, (oi, count) in enumerate(zip(chosen, counts)):
             obj = self.objects[oi]
-            enc = int(self.rng.integers(0, len(obj)))
+            enc = self.rng.choice(len(obj), self.input_views, replace=False)
             views = other_views(self.rng, len(obj), enc, int(count))
             fg = self.rng.random(int(count)) < self.foreground_fraction
             u, v = draw_pixels(self.rng, obj, views, fg)
-            images.append(np.asarray(obj.crops[enc]))
+            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc]))
             enc_views.append(enc)
             parts.append((slot, obj, views, u, v))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
@@ -168,7 +178,7 @@ class RaySampler:
         self._order = self._epoch_order(self.epoch)
 
 
-def _assemble(images: list[np.ndarray], enc_views: list[int], parts: list[tuple], ids: list[str]) -> RayBatch:
+def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
     ray_object, pix, views, poses, intr, rgb, labels, bg = [], [], [], [], [], [], [], []
     for slot, obj, view, u, v in parts:
         n = len(view)
@@ -186,14 +196,16 @@ def _assemble(images: list[np.ndarray], enc_views: list[int], parts: list[tuple]
         torch.from_numpy(np.concatenate(poses)),
     )
     return RayBatch(
-        images=torch.from_numpy(np.stack(images)).permute(0, 3, 1, 2).float() / 255.0,
+        images=torch.from_numpy(np.stack([i[0] for i in images])).permute(0, 1, 4, 2, 3).float() / 255.0,
+        input_intrinsics=torch.from_numpy(np.stack([i[1] for i in images])).float(),
+        input_poses=torch.from_numpy(np.stack([i[2] for i in images])).float(),
         ray_object=torch.from_numpy(np.concatenate(ray_object)).long(),
         origins=origins.float(),
         dirs=dirs.float(),
         rgb=torch.from_numpy(np.concatenate(rgb)).float() / 255.0,
         labels=torch.from_numpy(np.concatenate(labels)).long(),
         background=torch.from_numpy(np.concatenate(bg)).float(),
-        encoder_view=torch.tensor(enc_views),
+        encoder_view=torch.from_numpy(np.stack(enc_views)).long(),
         ray_view=torch.from_numpy(np.concatenate(views)).long(),
         object_ids=ids,
     )

@@ -23,7 +23,8 @@ from tqdm import tqdm
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.format import write_json_atomic
 from affnerf.errors import AffnerfError
-from affnerf.model.affnerf import AffNeRF
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.factory import build_model
 from affnerf.train import distributed as dist_utils
 from affnerf.train.cache import ObjectFrames, cached_frames
 from affnerf.train.checkpoint import check_compatible, list_checkpoints, load_checkpoint, save_checkpoint
@@ -154,11 +155,12 @@ def _train(config: TrainConfig, ctx: dist_utils.Context, started: float) -> Trai
     frames = _load_frames(config, ds, ctx)
     num_classes = len(ds.affordance_classes)
     torch.manual_seed(config.seed)
-    model = AffNeRF(config.model, num_classes).to(ctx.device)
+    model = build_model(config.model, num_classes).to(ctx.device)
     optimizer = torch.optim.Adam(model.parameters(), lr=config.optim.lr)
     sampler = RaySampler(
-        frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, config.seed, ctx.rank, ctx.world
-    )
+        frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, config.seed, ctx.rank,
+        ctx.world, config.input_views,
+    )  # fmt: skip
     generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
     step = 0
     if resume_from is not None:
@@ -178,7 +180,10 @@ def _train(config: TrainConfig, ctx: dist_utils.Context, started: float) -> Trai
         for group in optimizer.param_groups:
             group["lr"] = lr
         batch = sampler.next_batch().to(ctx.device)
-        coarse, fine = net(batch.images, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator)
+        coarse, fine = net(
+            batch.images, batch.input_intrinsics, batch.input_poses, batch.ray_object, batch.origins, batch.dirs,
+            batch.background, True, generator,
+        )  # fmt: skip
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight)
         optimizer.zero_grad(set_to_none=True)
         terms.total.backward()
@@ -213,7 +218,7 @@ def _train(config: TrainConfig, ctx: dist_utils.Context, started: float) -> Trai
         if step % config.checkpoint_every == 0 or step == end or out_of_time:
             _save(config, ctx, step, model, optimizer, sampler, generator, num_classes, ds.affordance_classes)
         if ctx.is_main and val_objects and (step % config.val_every == 0 or step == config.steps):
-            result = validate(model, val_objects, config.val_scale, chunk=config.chunk)
+            result = validate(model, val_objects, config.val_scale, chunk=config.chunk, input_views=config.input_views)
             logger.scalars(step, {"val/psnr": result.psnr, "val/affordance_miou": result.miou, "val/affordance_accuracy": result.accuracy})
             logger.images(step, result.images)
             scalars.update({"val/psnr": result.psnr, "val/affordance_miou": result.miou})
@@ -246,7 +251,7 @@ def _save(
     config: TrainConfig,
     ctx: dist_utils.Context,
     step: int,
-    model: AffNeRF,
+    model: ConditionedNeRF,
     optimizer: torch.optim.Optimizer,
     sampler: RaySampler,
     generator: torch.Generator,
@@ -261,6 +266,7 @@ def _save(
             "model_config": dataclasses.asdict(config.model),
             "num_classes": num_classes,
             "affordance_classes": list(classes),
+            "background": [float(c) for c in sampler.objects[0].background],
             "train_config": config_to_json(config),
             "rank_states": states,
         }
@@ -270,7 +276,7 @@ def _save(
 
 def _restore(
     path: Path,
-    model: AffNeRF,
+    model: ConditionedNeRF,
     optimizer: torch.optim.Optimizer,
     sampler: RaySampler,
     generator: torch.Generator,

@@ -8,10 +8,10 @@ import numpy as np
 import torch
 from PIL import Image
 
-from affnerf.data.crop import crop_object
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.metrics import confusion_matrix, mean_iou, pixel_accuracy, psnr
-from affnerf.model.affnerf import AffNeRF
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
 from affnerf.viz import depth_to_color, overlay_affordance
 
@@ -33,25 +33,20 @@ class ValidationResult:
     images: list[np.ndarray]
 
 
-def encoder_input(obj: ObjectData, view: int, size: int) -> torch.Tensor:
-    """(1, 3, size, size) crop of one view of a dataset object, as the encoders take it."""
-    crop = crop_object(obj.rgb(view), obj.affordance(view) > 0, size, obj.record.background_color)
-    return torch.from_numpy(crop).permute(2, 0, 1)[None].float() / 255.0
-
-
 def _downscale(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarray:
     return np.asarray(Image.fromarray(image).resize(size, Image.NEAREST if nearest else Image.BOX))
 
 
 @torch.no_grad()
 def validate(
-    model: AffNeRF,
+    model: ConditionedNeRF,
     objects: list[ObjectData],
     scale: float,
     views_per_object: int = 2,
-    chunk: int = 4096,
+    chunk: int = 1024,
+    input_views: int = 1,
 ) -> ValidationResult:
-    """Encode view 0 of each object and render ``views_per_object`` other views at ``scale`` of their size."""
+    """Encode the first views of each object and render ``views_per_object`` others at ``scale`` of their size."""
     device = next(model.parameters()).device
     was_training = model.training
     model.eval()
@@ -60,12 +55,14 @@ def validate(
     conf = np.zeros((num_classes, num_classes), np.int64)
     try:
         for obj in objects:
-            codes = model.encode(encoder_input(obj, 0, model.config.encoder_resolution).to(device))
+            inputs = list(range(input_views))
+            images, intrinsics, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
+            encoding = model.encode_views(images.to(device), intrinsics.to(device), poses.to(device))
             intr = obj.record.intrinsics.scaled(scale)
             size = (intr.width, intr.height)
-            targets = np.linspace(1, len(obj) - 1, views_per_object).round().astype(int)
+            targets = np.linspace(input_views, len(obj) - 1, views_per_object).round().astype(int)
             for k, view in enumerate(targets):
-                out = render_view(model, codes, intr, obj.pose(int(view)), obj.record.background_color, chunk)
+                out = render_view(model, encoding, intr, obj.pose(int(view)), obj.record.background_color, chunk)
                 gt_rgb = _downscale(obj.rgb(int(view)), size, nearest=False)
                 gt_aff = _downscale(obj.affordance(int(view)), size, nearest=True)
                 psnrs.append(psnr(out.rgb, gt_rgb / 255.0))

@@ -1,4 +1,5 @@
-"""AFF-NeRF under the protocol: encode the input view, render the target cameras."""
+"""Image-conditioned fields under the protocol (AFF-NeRF, PixelNeRF-M): encode the input views, render the
+target cameras."""
 
 from __future__ import annotations
 
@@ -7,38 +8,36 @@ import torch
 
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet
-from affnerf.model.affnerf import Codes
+from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
 from affnerf.predict.loading import LoadedModel
-from affnerf.train.validate import encoder_input
 
 
-class AffNeRFMethod:
-    """A trained AFF-NeRF. With several input views, their codes are averaged.
+class ConditionedNeRFMethod:
+    """A trained model of either kind; its name is the model's kind (``affnerf`` or ``pixelnerf``).
 
     Args:
         loaded: the model.
         chunk: rays per forward pass.
     """
 
-    name = "affnerf"
-
     def __init__(self, loaded: LoadedModel, chunk: int = 1024) -> None:
         self.loaded = loaded
         self.chunk = chunk
+        self.name = loaded.model.config.kind
 
     @torch.no_grad()
-    def encode(self, obj: ObjectData, inputs: list[int]) -> Codes:
-        """The object's codes from its input views (mean over views)."""
+    def encode(self, obj: ObjectData, inputs: list[int]):
+        """The object's encoding from its input views (AFF-NeRF averages the views' codes)."""
         model = self.loaded.model
-        images = torch.cat([encoder_input(obj, i, model.config.encoder_resolution) for i in inputs])
-        codes = model.encode(images.to(self.loaded.device))
-        return Codes(codes.shape.mean(0, keepdim=True), codes.appearance.mean(0, keepdim=True))
+        device = self.loaded.device
+        images, intr, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
+        return model.encode_views(images.to(device), intr.to(device), poses.to(device))
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
-        codes = self.encode(obj, inputs)
+        encoding = self.encode(obj, inputs)
         views = [
-            render_view(self.loaded.model, codes, targets.intrinsics, pose, targets.background, self.chunk)
+            render_view(self.loaded.model, encoding, targets.intrinsics, pose, targets.background, self.chunk)
             for pose in targets.poses
         ]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))

@@ -1,0 +1,53 @@
+"""``affnerf eval`` and ``affnerf metrics``: the Table 2 protocol, and scoring label folders of any method."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import tyro
+from tyro.extras import SubcommandApp
+
+from affnerf.eval.runner import EvalConfig
+
+app = SubcommandApp()
+
+
+@app.command(name="table2", is_default=True)
+def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
+    """Evaluate affordance at novel views like the paper's Table 2 (GUIDE 5).
+
+    For each object of the split: input views chosen by a fixed seed, K other views as targets; per category one
+    confusion matrix over all target views. Writes OUT/metrics_<method>.json (OUT/metrics.json: AFF-NeRF's, or the
+    first method's), OUT/table2.md across every method evaluated into OUT, and OUT/figure.png (input | ground truth |
+    each method).
+    """
+    from affnerf.eval.runner import run_eval
+
+    results = run_eval(config)
+    for label, m in results.items():
+        mean = m["mean"]
+        print(f"{label}: mIoU {mean['mIoU']:.3f}  PA {mean['PA']:.3f}  MPA {mean['MPA']:.3f}  ({mean['objects']} objects)")
+    print(f"-> {config.out / 'table2.md'}")
+
+
+def metrics(pred: Path, gt: Path, category_map: Path | None = None, out: Path | None = None) -> None:
+    """Score a folder of predicted label PNGs against ground-truth label PNGs with the same file names.
+
+    Prints mIoU, PA, MPA and their object-only variants per category (`all` without a category map) and their
+    mean, in the GUIDE 5 schema when written with --out.
+
+    Args:
+        pred: folder of predicted label PNGs (8-bit class ids).
+        gt: folder of ground-truth label PNGs.
+        category_map: JSON or YAML mapping file name (or stem) -> category.
+        out: write metrics.json here.
+    """
+    from affnerf.data.format import write_json_atomic
+    from affnerf.eval.folders import metrics_text, score_folders
+
+    result = score_folders(pred, gt, category_map)
+    print(metrics_text(result))
+    if out is not None:
+        write_json_atomic(out, result)
+        print(f"-> {out}")

@@ -1,0 +1,65 @@
+"""Retrieval: the training object whose shape code is nearest renders its ground-truth affordance.
+
+A learned method that does not beat this has learned nothing beyond recognising the nearest training shape.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.format import IndexEntry
+from affnerf.data.render import Renderer
+from affnerf.data.writer import surface_from_record
+from affnerf.eval.protocol import Prediction, TargetSet
+from affnerf.meshio import read_labelled_ply
+from affnerf.model.inputs import dataset_views
+from affnerf.predict.loading import LoadedModel
+
+
+class RetrievalMethod:
+    """Nearest training object by AFF-NeRF shape code (L2), rendered from the target cameras.
+
+    Args:
+        loaded: a trained AFF-NeRF (its shape encoder embeds the images).
+        dataset: the dataset holding the training objects and their ``mesh.ply``.
+        categories: restrict the bank to these categories (None = every training object).
+        views_per_object: views of each training object whose codes are averaged into its bank entry.
+    """
+
+    name = "retrieval"
+
+    def __init__(
+        self, loaded: LoadedModel, dataset: Dataset, categories: list[str] | None = None, views_per_object: int = 4
+    ) -> None:
+        if loaded.model.config.kind != "affnerf":
+            raise ValueError("retrieval embeds images with an AFF-NeRF's shape encoder")
+        self.loaded, self.dataset = loaded, dataset
+        self.views_per_object = views_per_object
+        self.entries: list[IndexEntry] = dataset.objects(split="train", categories=categories)
+        self.bank = np.stack([self._embed(dataset.load_object(e), None) for e in self.entries])
+        self._renderers: dict[str, Renderer] = {}
+
+    @torch.no_grad()
+    def _embed(self, obj: ObjectData, views: list[int] | None) -> np.ndarray:
+        if views is None:
+            views = np.linspace(0, len(obj) - 1, self.views_per_object).round().astype(int).tolist()
+        model = self.loaded.model
+        images, intr, poses = dataset_views(obj, views, model.config.encoder_resolution)
+        codes = model.encode_views(images.to(self.loaded.device), intr.to(self.loaded.device), poses.to(self.loaded.device))
+        return codes.shape[0].cpu().numpy()
+
+    def nearest(self, obj: ObjectData, inputs: list[int]) -> IndexEntry:
+        """The training object nearest to the input views' shape code."""
+        code = self._embed(obj, inputs)
+        return self.entries[int(np.argmin(((self.bank - code) ** 2).sum(axis=1)))]
+
+    def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
+        entry = self.nearest(obj, inputs)
+        if entry.id not in self._renderers:
+            mesh = read_labelled_ply(self.dataset.root / entry.path / "mesh.ply")
+            self._renderers[entry.id] = Renderer(surface_from_record(mesh), targets.background)
+        renderer = self._renderers[entry.id]
+        frames = [renderer.render(targets.intrinsics, pose) for pose in targets.poses]
+        return Prediction(np.stack([f.affordance for f in frames]), np.stack([f.rgb / 255.0 for f in frames]))

@@ -1,0 +1,155 @@
+"""``affnerf eval``: run the Table 2 protocol for one or more methods and write metrics, table and figure.
+
+Each method's results go to ``OUT/metrics_<method>.json`` (GUIDE 5 schema); ``OUT/metrics.json`` holds
+AFF-NeRF's once it has been evaluated into ``OUT``, and until then the first method's. ``OUT/table2.md`` and ``OUT/figure.png`` are rebuilt from every method evaluated into ``OUT`` so
+far, so methods evaluated in separate calls (a baseline with its own run) end up in one table.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from PIL import Image
+
+from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.format import write_json_atomic
+from affnerf.errors import AffnerfError
+from affnerf.eval.protocol import Method, ProtocolConfig, evaluate
+from affnerf.eval.report import figure_grid, read_method_results, save_examples, table2_markdown
+
+METHODS = ("affnerf", "pixelnerf", "semantic-nerf", "retrieval", "constant")
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """Settings of ``affnerf eval``.
+
+    Attributes:
+        run: the trained run (AFF-NeRF for ``affnerf`` and ``retrieval``; a PixelNeRF-M run for ``pixelnerf``;
+            not used by ``semantic-nerf`` and ``constant``).
+        data: the dataset.
+        out: output folder.
+        split: ``test`` (held-out instances), ``unseen`` (held-out categories) or ``val``.
+        method: one or more of affnerf, pixelnerf, semantic-nerf, retrieval, constant (comma-separated).
+        input_views: views each method is given (1: single image; PixelNeRF-M is also run with 3, Semantic-NeRF
+            with 20 as a many-view reference).
+        target_views: views scored per object (K = 20 in GUIDE 5).
+        scale: resolution of scored views as a fraction of the dataset's images.
+        seed: seed of the view choice.
+        categories: only these categories (comma-separated; empty = all).
+        max_objects: at most this many objects per category (0 = all).
+        semantic_steps: optimisation steps of each per-object Semantic-NeRF.
+        device: ``auto``, ``cpu`` or ``cuda``.
+        chunk: rays per forward pass.
+        figure_objects: example objects in the figure (one per category, up to this many).
+    """
+
+    run: Path
+    data: Path
+    out: Path
+    split: Literal["test", "unseen", "val"] = "test"
+    method: str = "affnerf"
+    input_views: int = 1
+    target_views: int = 20
+    scale: float = 1.0
+    seed: int = 0
+    categories: str = ""
+    max_objects: int = 0
+    semantic_steps: int = 400
+    device: str = "auto"
+    chunk: int = 1024
+    figure_objects: int = 8
+
+
+def parse_methods(text: str) -> list[str]:
+    """Method names from ``a,b`` or ``all``, validated."""
+    names = list(METHODS[:4]) if text.strip() == "all" else [t.strip() for t in text.split(",") if t.strip()]
+    for name in names:
+        if name not in METHODS:
+            raise AffnerfError(f"unknown method {name!r} (known: {', '.join(METHODS)})")
+    return names
+
+
+def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
+    cats = [c.strip() for c in config.categories.split(",") if c.strip()] or None
+    entries = ds.objects(split=config.split, categories=cats)
+    if not entries:
+        raise AffnerfError(f"{ds.root / 'dataset.json'}: no objects in split {config.split!r}")
+    by_cat: dict[str, list] = {}
+    for e in entries:
+        if not config.max_objects or len(by_cat.get(e.category, [])) < config.max_objects:
+            by_cat.setdefault(e.category, []).append(e)
+    ordered = []  # round-robin by category, so the figure's first objects span the categories
+    while any(by_cat.values()):
+        for cat in sorted(by_cat):
+            if by_cat[cat]:
+                ordered.append(by_cat[cat].pop(0))
+    objects = [ds.load_object(e) for e in ordered]
+    needed = config.input_views + config.target_views
+    short = [o.record.object_id for o in objects if len(o) < needed]
+    if short:
+        raise AffnerfError(f"{short[0]} has fewer than {needed} views (input + target views)")
+    return objects
+
+
+def build_method(name: str, config: EvalConfig, ds: Dataset) -> Method:
+    """The method object for a name (loading the run it needs)."""
+    from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
+    from affnerf.eval.methods.constant import ConstantMethod
+    from affnerf.eval.methods.retrieval import RetrievalMethod
+    from affnerf.eval.methods.semantic_nerf import SemanticNeRFConfig, SemanticNeRFMethod
+    from affnerf.predict.loading import load_model
+    from affnerf.predict.predictor import pick_device
+
+    if name == "constant":
+        return ConstantMethod(0)
+    if name == "semantic-nerf":
+        return SemanticNeRFMethod(len(ds.affordance_classes), SemanticNeRFConfig(steps=config.semantic_steps), config.chunk)
+    loaded = load_model(config.run, pick_device(config.device))
+    kind = loaded.model.config.kind
+    wanted = "pixelnerf" if name == "pixelnerf" else "affnerf"
+    if kind != wanted:
+        raise AffnerfError(f"{loaded.path}: method {name} needs a {wanted} run, this is a {kind} run")
+    if loaded.classes != ds.affordance_classes:
+        raise AffnerfError(f"{loaded.path}: trained with other affordance classes than {ds.root / 'dataset.json'}")
+    if name == "retrieval":
+        return RetrievalMethod(loaded, ds)
+    return ConditionedNeRFMethod(loaded, config.chunk)
+
+
+def method_label(name: str, input_views: int) -> str:
+    """The name a method's results are filed under: with its input views when not 1 (``pixelnerf-3v``)."""
+    return name if input_views == 1 else f"{name}-{input_views}v"
+
+
+def run_eval(config: EvalConfig) -> dict[str, dict[str, Any]]:
+    """Evaluate each method and write the outputs; returns the metrics per method label."""
+    names = parse_methods(config.method)
+    ds = Dataset.open(config.data)
+    objects = _objects(ds, config)
+    protocol = ProtocolConfig(config.input_views, config.target_views, config.scale, config.seed)
+    out = Path(config.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results = {}
+    for name in names:
+        method = build_method(name, config, ds)
+        label = method_label(name, config.input_views)
+        started = time.perf_counter()
+        result = evaluate(method, objects, protocol, config.split, len(ds.affordance_classes), config.figure_objects)
+        result.method = label
+        metrics = result.to_json()
+        metrics["settings"] = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
+        write_json_atomic(out / f"metrics_{label}.json", metrics)
+        save_examples(out, label, result.examples)
+        results[label] = metrics
+    everything = read_method_results(out)
+    main = next((r for r in everything if r["method"] == "affnerf"), results[method_label(names[0], config.input_views)])
+    write_json_atomic(out / "metrics.json", main)
+    (out / "table2.md").write_text(table2_markdown(everything))
+    figure = figure_grid(out, [r["method"] for r in everything])
+    if figure is not None:
+        Image.fromarray(figure).save(out / "figure.png")
+    return results

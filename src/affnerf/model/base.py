@@ -1,0 +1,97 @@
+"""What every image-conditioned radiance field here shares: encode input views, condition a coarse and a fine
+field on them, render rays. AFF-NeRF and the PixelNeRF baseline differ only in the encoding and conditioning."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any
+
+import torch
+from torch import nn
+
+from affnerf.model.config import ModelConfig
+from affnerf.model.field import ConditionalField
+from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
+
+
+class ConditionedNeRF(nn.Module, ABC):
+    """Base of image-conditioned fields.
+
+    Subclasses set ``self.renderer`` and implement :meth:`encode_views` and :meth:`condition`.
+    """
+
+    config: ModelConfig
+    num_classes: int
+    renderer: FieldRenderer
+
+    @property
+    def coarse(self) -> ConditionalField:
+        return self.renderer.coarse
+
+    @property
+    def fine(self) -> ConditionalField | None:
+        return self.renderer.fine
+
+    @abstractmethod
+    def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Any:
+        """Encode B objects from V input views each.
+
+        Args:
+            images: (B, V, 3, S, S) object-centred crops in [0, 1].
+            intrinsics: (B, V, 4) the crops' (fl_x, fl_y, cx, cy).
+            poses: (B, V, 4, 4) the views' camera-to-world poses.
+        """
+
+    @abstractmethod
+    def condition(self, encoding: Any, ray_object: torch.Tensor) -> Condition:
+        """The per-point conditioning of rays whose object indices (into ``encoding``) are ``ray_object``."""
+
+    def render_rays(
+        self,
+        encoding: Any,
+        ray_object: torch.Tensor,
+        origins: torch.Tensor,
+        dirs: torch.Tensor,
+        background: torch.Tensor,
+        perturb: bool = False,
+        generator: torch.Generator | None = None,
+    ) -> tuple[RayOutputs, RayOutputs | None]:
+        """Render rays of encoded objects; ``ray_object`` (R,) indexes the objects of ``encoding``."""
+        return self.renderer.render_rays(
+            self.condition(encoding, ray_object), origins, dirs, background, perturb, generator
+        )
+
+    def forward(
+        self,
+        images: torch.Tensor,
+        intrinsics: torch.Tensor,
+        poses: torch.Tensor,
+        ray_object: torch.Tensor,
+        origins: torch.Tensor,
+        dirs: torch.Tensor,
+        background: torch.Tensor,
+        perturb: bool = True,
+        generator: torch.Generator | None = None,
+    ) -> tuple[RayOutputs, RayOutputs | None]:
+        """Encode the input views and render rays (one training forward pass)."""
+        encoding = self.encode_views(images, intrinsics, poses)
+        return self.render_rays(encoding, ray_object, origins, dirs, background, perturb, generator)
+
+    def point_fields(self, encoding: Any, index: int = 0) -> tuple[Any, Any]:
+        """Density and affordance-class callables of object ``index`` at arbitrary (N, 3) points (the fine field
+        when there is one), for mesh extraction."""
+        field = self.fine if self.fine is not None else self.coarse
+
+        def cond(points: torch.Tensor) -> torch.Tensor:
+            rays = torch.arange(len(points), device=points.device)
+            obj = torch.full((len(points),), index, dtype=torch.long, device=points.device)
+            return self.condition(encoding, obj)(points, rays)[0]
+
+        def density(points: torch.Tensor) -> torch.Tensor:
+            return field.density_only(points, cond(points))
+
+        def labels(points: torch.Tensor) -> torch.Tensor:
+            _, logits = field.geometry(points, cond(points))
+            return logits.argmax(dim=-1) + 1  # object classes start at 1
+
+        return density, labels

@@ -1,0 +1,1 @@
+"""Trained checkpoints shipped with the package (see MODEL_CARD.md at the repository root)."""

@@ -1,0 +1,125 @@
+"""``affnerf predict``: everything a user gets from one photo, written to one folder.
+
+``input.png`` (the prepared crop), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
+``affordance_model.ply`` (vertex colours and an integer vertex property ``affordance``),
+``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, the files written).
+Files are assembled in a temporary folder and moved into place at the end, so a failure leaves an earlier
+prediction in the folder untouched.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import Image
+
+from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
+from affnerf.meshio import LabelledMesh, write_labelled_ply
+from affnerf.predict.mesh import DEFAULT_LEVEL, class_areas
+from affnerf.predict.predictor import Predictor, turntable_poses
+from affnerf.viz import overlay_affordance
+
+
+@dataclass(frozen=True)
+class PredictConfig:
+    """Settings of ``affnerf predict``.
+
+    Attributes:
+        image: the photo of the object (any size and mode).
+        out: output folder.
+        run: a run folder or checkpoint (default: the model shipped with affnerf).
+        mask: optional mask image (white or opaque = object).
+        views: turntable views.
+        width: turntable image width.
+        height: turntable image height.
+        elevation: turntable camera elevation, degrees.
+        radius: turntable camera distance, metres.
+        resolution: marching-cubes grid resolution.
+        level: density of the extracted surface.
+        device: ``auto``, ``cpu`` or ``cuda``.
+        chunk: rays per forward pass.
+    """
+
+    image: Path
+    out: Path
+    run: Path | None = None
+    mask: Path | None = None
+    views: int = 12
+    width: int = 200
+    height: int = 150
+    elevation: float = 25.0
+    radius: float = 0.75
+    resolution: int = 128
+    level: float = DEFAULT_LEVEL
+    device: str = "auto"
+    chunk: int = 1024
+
+
+def export_glb(path: Path, mesh: LabelledMesh) -> None:
+    """Write the mesh with its class colours as binary glTF."""
+    data = mesh.to_trimesh().export(file_type="glb")
+    path.write_bytes(data)
+
+
+def _gif(frames: list[np.ndarray], path: Path) -> None:
+    images = [Image.fromarray(f) for f in frames]
+    images[0].save(path, save_all=True, append_images=images[1:], duration=120, loop=0)
+
+
+def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, Any]:
+    """Run the whole prediction and write its files; returns the content of ``prediction.json``."""
+    obj = predictor.encode_image(config.image, config.mask)
+    intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)
+    frames = []
+    for pose in turntable_poses(config.views, config.elevation, config.radius):
+        view = predictor.render(obj, intr, pose)
+        rgb = np.round(view.rgb * 255).astype(np.uint8)
+        frames.append(np.concatenate([rgb, overlay_affordance(rgb, view.labels)], axis=1))
+    mesh = predictor.mesh(obj, config.resolution, config.level)
+    out = Path(config.out)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out))
+    try:
+        files = ["input.png"]
+        Image.fromarray(obj.prepared.crop).save(tmp / "input.png")
+        (tmp / "turntable").mkdir()
+        for i, frame in enumerate(frames):
+            Image.fromarray(frame).save(tmp / "turntable" / f"{i:03d}.png")
+            files.append(f"turntable/{i:03d}.png")
+        _gif(frames, tmp / "turntable.gif")
+        files.append("turntable.gif")
+        areas: dict[int, float] = {}
+        if len(mesh.faces):
+            write_labelled_ply(tmp / "affordance_model.ply", mesh)
+            export_glb(tmp / "affordance_model.glb", mesh)
+            files += ["affordance_model.ply", "affordance_model.glb"]
+            areas = class_areas(mesh)
+        names = predictor.classes
+        summary = {
+            "image": str(config.image),
+            "model": str(predictor.loaded.path),
+            "model_step": predictor.loaded.step,
+            "object_separated_by": obj.prepared.source,
+            "object_bbox": list(obj.prepared.bbox),
+            "classes_present": [names[c] for c in sorted(areas)],
+            "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
+            "mesh": {"vertices": len(mesh.vertices), "faces": len(mesh.faces), "resolution": config.resolution,
+                     "level": config.level},  # fmt: skip
+            "files": files + ["prediction.json"],
+        }
+        (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")
+        for name in ("turntable",):
+            if (out / name).exists():
+                shutil.rmtree(out / name)
+        for entry in os.listdir(tmp):
+            os.replace(tmp / entry, out / entry)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return summary

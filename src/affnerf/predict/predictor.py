@@ -1,0 +1,102 @@
+"""From one image to a 3D affordance model: encode, render a turntable, extract and export the labelled mesh.
+
+Python use::
+
+    from affnerf.predict.predictor import Predictor
+    p = Predictor.load("runs/mini")                      # a run folder or a checkpoint
+    obj = p.encode_image("mug.png")                      # codes of the object in the photo
+    view = p.render(obj, intrinsics, c2w)                # RGB, depth, affordance at any camera
+    mesh = p.mesh(obj, resolution=128)                   # LabelledMesh with per-vertex affordance
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from affnerf.data.cameras import Intrinsics, look_at
+from affnerf.errors import input_error
+from affnerf.meshio import LabelledMesh
+from affnerf.model.affnerf import Codes
+from affnerf.model.views import RenderedView, render_view
+from affnerf.predict.image import PreparedImage, prepare_image
+from affnerf.predict.loading import LoadedModel, load_model
+from affnerf.predict.mesh import DEFAULT_LEVEL, extract_labelled_mesh
+
+
+@dataclass
+class EncodedObject:
+    """An object seen in one image: its codes and how its image was prepared."""
+
+    codes: Codes
+    prepared: PreparedImage
+
+
+def turntable_poses(count: int, elevation_deg: float = 25.0, radius: float = 0.75) -> np.ndarray:
+    """(count, 4, 4) cameras circling the canonical frame's z axis, looking at the origin.
+
+    Example:
+        >>> turntable_poses(4).shape
+        (4, 4, 4)
+    """
+    elev = math.radians(elevation_deg)
+    poses = []
+    for k in range(count):
+        yaw = 2.0 * math.pi * k / count - math.pi / 2.0  # the first view looks from -y, the objects' front
+        eye = radius * np.array([math.cos(elev) * math.cos(yaw), math.cos(elev) * math.sin(yaw), math.sin(elev)])
+        poses.append(look_at(eye, np.zeros(3)))
+    return np.stack(poses)
+
+
+def pick_device(name: str) -> torch.device:
+    """``auto`` -> CUDA when available, else CPU."""
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch.device(name)
+
+
+class Predictor:
+    """A trained model with the operations of prediction."""
+
+    def __init__(self, loaded: LoadedModel, chunk: int = 1024) -> None:
+        self.loaded = loaded
+        self.chunk = chunk
+
+    @classmethod
+    def load(cls, path: Path, device: str = "auto", chunk: int = 1024) -> Predictor:
+        """Load from a run folder or checkpoint file (an AFF-NeRF: prediction from a photo needs no pose)."""
+        loaded = load_model(Path(path), pick_device(device))
+        if loaded.model.config.kind != "affnerf":
+            raise input_error(loaded.path, f"a {loaded.model.config.kind} model needs the input camera's pose; predict from photos with an AFF-NeRF run")
+        return cls(loaded, chunk)
+
+    @property
+    def classes(self) -> list[str]:
+        return self.loaded.classes
+
+    @torch.no_grad()
+    def encode_crops(self, crops: np.ndarray) -> Codes:
+        """Codes of (B, S, S, 3) uint8 encoder crops."""
+        images = torch.from_numpy(np.ascontiguousarray(crops)).permute(0, 3, 1, 2).float() / 255.0
+        return self.loaded.model.encode(images.to(self.loaded.device))
+
+    def encode_image(self, image: Path, mask: Path | None = None) -> EncodedObject:
+        """Prepare a photo (separate, crop, centre, resize) and encode it."""
+        size = self.loaded.model.config.encoder_resolution
+        prepared = prepare_image(Path(image), size, self.loaded.background, mask)
+        return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
+
+    def render(self, obj: EncodedObject | Codes, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
+        """Render the object from a camera in its canonical frame."""
+        codes = obj.codes if isinstance(obj, EncodedObject) else obj
+        return render_view(self.loaded.model, codes, intrinsics, c2w, self.loaded.background, self.chunk)
+
+    def mesh(self, obj: EncodedObject | Codes, resolution: int = 128, level: float = DEFAULT_LEVEL) -> LabelledMesh:
+        """The labelled mesh of the object (marching cubes in the canonical cube)."""
+        codes = obj.codes if isinstance(obj, EncodedObject) else obj
+        density, labels = self.loaded.model.point_fields(codes)
+        return extract_labelled_mesh(density, labels, resolution, level, chunk=65536)

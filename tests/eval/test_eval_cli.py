@@ -1,0 +1,83 @@
+"""``affnerf eval`` end to end on a tiny run and dataset, every method; ``affnerf metrics`` on label folders."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from affnerf.cli.main import main
+from affnerf.eval.protocol import METRIC_KEYS
+
+
+def _eval(run, data, out, method, *extra):
+    return main(["eval", "--run", str(run), "--data", str(data), "--split", "test", "--method", method,
+                 "--out", str(out), "--target-views", "3", "--scale", "0.5", "--semantic-steps", "20", "--device", "cpu",
+                 *extra])  # fmt: skip
+
+
+def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dataset, tmp_path):
+    out = tmp_path / "eval"
+    assert _eval(trained_runs["affnerf"], train_dataset, out, "affnerf,retrieval,semantic-nerf,constant") == 0
+    assert _eval(trained_runs["pixelnerf"], train_dataset, out, "pixelnerf", "--input-views", "3") == 0
+    labels = {"affnerf", "retrieval", "semantic-nerf", "constant", "pixelnerf-3v"}
+    for label in labels:
+        m = json.loads((out / f"metrics_{label}.json").read_text())
+        assert m["method"] == label and m["split"] == "test"
+        assert set(m["categories"]) == {"bottle", "screwdriver"}
+        for cat in m["categories"].values():
+            assert set(METRIC_KEYS) <= set(cat) and cat["objects"] == 1 and cat["views"] == 3
+            assert 0.0 <= cat["mIoU"] <= 1.0 and 0.0 <= cat["PA"] <= 1.0
+        assert m["mean"]["objects"] == 2
+    assert json.loads((out / "metrics.json").read_text())["method"] == "affnerf"
+    table = (out / "table2.md").read_text()
+    for label in labels:
+        assert f"| {label} |" in table
+    assert "| mIoU | affnerf |" in table and "Average" in table
+    figure = np.asarray(Image.open(out / "figure.png"))
+    assert figure.shape[0] > 20 and figure.shape[1] > 6 * 20  # input | ground truth | five methods
+    constant = json.loads((out / "metrics_constant.json").read_text())
+    assert constant["mean"]["PA_object"] == 0.0 and constant["mean"]["PSNR"] is None
+
+
+def test_wrong_run_for_a_method_is_a_clear_error(trained_runs, train_dataset, tmp_path, capsys):
+    assert _eval(trained_runs["pixelnerf"], train_dataset, tmp_path / "e", "affnerf") == 2
+    assert "method affnerf needs a affnerf run, this is a pixelnerf run" in capsys.readouterr().err
+    assert _eval(trained_runs["affnerf"], train_dataset, tmp_path / "e", "nerfacto") == 2
+    assert "unknown method 'nerfacto'" in capsys.readouterr().err
+
+
+def _labels(folder, name, array):
+    path = folder / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(np.asarray(array, np.uint8)).save(path)
+
+
+def test_metrics_scores_label_folders_per_category(tmp_path, capsys):
+    gt, pred = tmp_path / "gt", tmp_path / "pred"
+    _labels(gt, "a.png", [[0, 1], [1, 1]])
+    _labels(pred, "a.png", [[0, 1], [0, 1]])
+    _labels(gt, "b.png", [[0, 2], [2, 2]])
+    _labels(pred, "b.png", [[0, 2], [2, 2]])
+    assert main(["metrics", "--pred", str(pred), "--gt", str(gt), "--out", str(tmp_path / "m.json")]) == 0
+    m = json.loads((tmp_path / "m.json").read_text())
+    assert list(m["categories"]) == ["all"]
+    assert m["categories"]["all"]["PA"] == pytest.approx(7 / 8)
+    (tmp_path / "map.json").write_text(json.dumps({"a.png": "mug", "b": "pen"}))
+    assert main(["metrics", "--pred", str(pred), "--gt", str(gt), "--category-map", str(tmp_path / "map.json"),
+                 "--out", str(tmp_path / "m2.json")]) == 0  # fmt: skip
+    m2 = json.loads((tmp_path / "m2.json").read_text())
+    assert m2["categories"]["pen"]["mIoU"] == 1.0
+    assert m2["categories"]["mug"]["mIoU"] == pytest.approx((1 / 2 + 2 / 3) / 2)
+    assert m2["mean"]["mIoU"] == pytest.approx((1.0 + (1 / 2 + 2 / 3) / 2) / 2)
+    assert "mug" in capsys.readouterr().out
+
+
+def test_metrics_reports_a_missing_prediction(tmp_path, capsys):
+    gt, pred = tmp_path / "gt", tmp_path / "pred"
+    _labels(gt, "a.png", [[0, 1]])
+    pred.mkdir()
+    assert main(["metrics", "--pred", str(pred), "--gt", str(gt)]) == 2
+    assert "a.png: prediction missing" in capsys.readouterr().err

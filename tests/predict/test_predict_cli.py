@@ -1,0 +1,78 @@
+"""``affnerf predict`` end to end on a tiny trained run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from affnerf.cli.main import main
+from affnerf.data.dataset import Dataset
+from affnerf.meshio import read_labelled_ply
+
+
+@pytest.fixture(scope="module")
+def photo(train_dataset, tmp_path_factory):
+    """A test-split view of the tiny dataset saved as a photo, in several modes and sizes."""
+    ds = Dataset.open(train_dataset)
+    obj = ds.load_object(ds.objects(split="test")[0])
+    rgb = obj.rgb(0)
+    folder = tmp_path_factory.mktemp("photos")
+    big = Image.fromarray(rgb).resize((rgb.shape[1] * 5, rgb.shape[0] * 5), Image.NEAREST)
+    paths = {"rgb": folder / "rgb.png", "grey": folder / "grey.png", "rgba": folder / "rgba.png", "jpg": folder / "big.jpg"}
+    big.save(paths["rgb"])
+    big.convert("L").save(paths["grey"])
+    alpha = Image.fromarray(((obj.affordance(0) > 0) * 255).astype(np.uint8)).resize(big.size, Image.NEAREST)
+    rgba = big.copy()
+    rgba.putalpha(alpha)
+    rgba.save(paths["rgba"])
+    big.save(paths["jpg"], quality=90)
+    return paths
+
+
+@pytest.mark.parametrize("kind", ["rgb", "grey", "rgba", "jpg"])
+def test_predict_writes_every_output(trained_runs, photo, tmp_path, capsys, kind):
+    out = tmp_path / "pred"
+    args = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(photo[kind]), "--out", str(out),
+            "--views", "3", "--width", "32", "--height", "24", "--resolution", "24", "--level", "0.5", "--device", "cpu"]  # fmt: skip
+    assert main(args) == 0
+    summary = json.loads((out / "prediction.json").read_text())
+    for name in summary["files"]:
+        assert (out / name).is_file(), name
+    assert {"input.png", "turntable.gif", "turntable/000.png", "prediction.json"} <= set(summary["files"])
+    gif = Image.open(out / "turntable.gif")
+    assert gif.n_frames == 3
+    assert np.asarray(Image.open(out / "turntable/000.png")).shape == (24, 64, 3)  # RGB | overlay
+    assert summary["object_separated_by"] == ("alpha" if kind == "rgba" else "uniform background")
+    if "affordance_model.ply" in summary["files"]:
+        mesh = read_labelled_ply(out / "affordance_model.ply")
+        assert "affordance" in mesh.vertex_props and mesh.vertex_colors is not None
+        present = {summary["classes_present"][i] for i in range(len(summary["classes_present"]))}
+        assert set(summary["surface_area_m2"]) == present
+        assert (out / "affordance_model.glb").stat().st_size > 0
+
+
+def test_blank_and_missing_images_are_one_line_errors_and_keep_earlier_outputs(trained_runs, photo, tmp_path, capsys):
+    out = tmp_path / "pred"
+    base = ["predict", "--run", str(trained_runs["affnerf"]), "--out", str(out), "--views", "2", "--width", "16",
+            "--height", "12", "--resolution", "16", "--device", "cpu"]  # fmt: skip
+    assert main(base + ["--image", str(photo["rgb"])]) == 0
+    before = (out / "prediction.json").read_bytes()
+    capsys.readouterr()
+    blank = tmp_path / "blank.png"
+    Image.new("RGB", (50, 40), (255, 255, 255)).save(blank)
+    assert main(base + ["--image", str(blank)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "blank.png: no object found" in err
+    assert main(base + ["--image", str(tmp_path / "missing.png")]) == 2
+    assert "missing.png: file not found" in capsys.readouterr().err
+    assert (out / "prediction.json").read_bytes() == before
+    assert not [p for p in out.iterdir() if p.name.startswith(".predict-")]
+
+
+def test_a_pixelnerf_run_cannot_predict_from_a_photo(trained_runs, photo, tmp_path, capsys):
+    args = ["predict", "--run", str(trained_runs["pixelnerf"]), "--image", str(photo["rgb"]), "--out", str(tmp_path / "x")]
+    assert main(args) == 2
+    assert "needs the input camera's pose" in capsys.readouterr().err
