@@ -81,3 +81,12 @@ def test_rays_missing_the_cube_render_background_without_evaluation():
     torch.testing.assert_close(fine.affordance.sum(-1), torch.ones(2))
     assert fine.t.shape == (2, 16) and coarse.t.shape == (2, 8)
     assert torch.all(fine.t[0] >= 0.55 - 1e-6) and torch.all(fine.t[0] <= 1.05 + 1e-6)  # inside the cube
+
+
+def test_a_batch_where_no_ray_meets_the_cube_renders_background():
+    model = AffNeRF(SMALL, num_classes=4)
+    codes = model.encode(torch.rand(1, 3, 32, 32))
+    origins = torch.tensor([[0.0, 0.8, 0.8]] * 3)
+    dirs = torch.tensor([[0.0, 0.0, -1.0]] * 3)
+    coarse, fine = model.render_rays(codes, torch.zeros(3, dtype=torch.long), origins, dirs, torch.ones(3, 3))
+    assert torch.all(fine.rgb == 1) and torch.all(fine.opacity == 0) and torch.all(fine.affordance[:, 0] == 1)

@@ -17,7 +17,7 @@ from affnerf.errors import AffnerfError
 
 def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     """The command tree (``args`` lets ``train`` take its defaults from the preset they name)."""
-    from affnerf.cli import data, demo, evaluate
+    from affnerf.cli import data, demo, evaluate, grasp
     from affnerf.cli.predict import predict
     from affnerf.cli.train import make_train_command
 
@@ -27,6 +27,7 @@ def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     app.command(predict, name="predict")
     app.command(evaluate.app, name="eval", help="Evaluate like the paper's Table 2 (and, with `eval grasp`, Table 3).")
     app.command(evaluate.metrics, name="metrics")
+    app.command(grasp.app, name="grasp", help="Plan parallel-jaw grasps on a labelled mesh, or score given grasps.")
     app.command(demo.demo, name="demo", help="Run the whole pipeline at a small scale on this machine.")
     return app
 

@@ -138,6 +138,42 @@ def albedo(surface: SurfaceMesh, face: np.ndarray, points: np.ndarray, bary: np.
     return out
 
 
+class RayCaster:
+    """First hits of rays on a triangle mesh (Embree).
+
+    Args:
+        vertices: (V, 3) positions.
+        faces: (F, 3) vertex indices.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+        self._scene = rtcore_scene.EmbreeScene()
+        TriangleMesh(
+            scene=self._scene,
+            vertices=np.ascontiguousarray(vertices, np.float32),
+            indices=np.ascontiguousarray(faces, np.int32),
+        )
+
+    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """First hits of rays.
+
+        Args:
+            origins: (N, 3) ray origins.
+            dirs: (N, 3) ray directions (any length: the returned ``t`` is in units of it).
+
+        Returns:
+            ray indices that hit (M,), their faces (M,), the ray parameters t (M,) and barycentrics (M, 3) of the
+            hit points in their faces' corner order.
+        """
+        out = self._scene.run(
+            np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(dirs, np.float32), output=1
+        )
+        ray = np.flatnonzero(out["geomID"] != -1)
+        u, v = out["u"][ray].astype(np.float64), out["v"][ray].astype(np.float64)
+        bary = np.stack([1.0 - u - v, u, v], 1)
+        return ray, out["primID"][ray].astype(np.int64), out["tfar"][ray].astype(np.float64), bary
+
+
 class Renderer:
     """Renders one object from any camera.
 
@@ -160,32 +196,12 @@ class Renderer:
         self.surface = surface
         self.background = np.asarray(background, np.float64)
         self.lighting = lighting
-        self._scene = rtcore_scene.EmbreeScene()
-        TriangleMesh(
-            scene=self._scene,
-            vertices=np.ascontiguousarray(surface.vertices, np.float32),
-            indices=np.ascontiguousarray(surface.faces, np.int32),
-        )
+        self.caster = RayCaster(surface.vertices, surface.faces)
         self._corner_normals = corner_normals(surface.vertices, surface.faces, lighting.crease_angle_deg)
 
-    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """First hits of rays.
-
-        Args:
-            origins: (N, 3) ray origins.
-            dirs: (N, 3) ray directions (any length: the returned ``t`` is in units of it).
-
-        Returns:
-            ray indices that hit (M,), their faces (M,), the ray parameters t (M,) and barycentrics (M, 3) of the
-            hit points in their faces' corner order.
-        """
-        out = self._scene.run(
-            np.ascontiguousarray(origins, np.float32), np.ascontiguousarray(dirs, np.float32), output=1
-        )
-        ray = np.flatnonzero(out["geomID"] != -1)
-        u, v = out["u"][ray].astype(np.float64), out["v"][ray].astype(np.float64)
-        bary = np.stack([1.0 - u - v, u, v], 1)
-        return ray, out["primID"][ray].astype(np.int64), out["tfar"][ray].astype(np.float64), bary
+    def cast(self, origins: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """First hits of rays on the object (see :meth:`RayCaster.cast`)."""
+        return self.caster.cast(origins, dirs)
 
     def render(self, intr: Intrinsics, c2w: np.ndarray) -> Frame:
         """Render the four maps of one view from camera-to-world pose ``c2w`` (4, 4)."""

@@ -135,7 +135,7 @@ class FieldRenderer(nn.Module):
         out = field(points, unit[:, None, :].expand(r, s, 3).reshape(-1, 3), trunk_in, color_in)
         weights, trans = weights_from_density(out.sigma.reshape(r, s), sample_deltas(t, far))
         opacity = weights.sum(dim=-1)
-        probs = torch.softmax(out.logits.reshape(r, s, -1), dim=-1)
+        probs = torch.softmax(out.logits.reshape(r, s, out.logits.shape[-1]), dim=-1)
         return RayOutputs(
             rgb=composite(accumulate(weights, out.rgb.reshape(r, s, 3)), opacity, background),
             depth=render_depth(weights, t),

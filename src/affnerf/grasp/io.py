@@ -1,0 +1,141 @@
+"""Grasp files and pictures: ``grasps.json`` (written and validated), a GLB scene with the gripper at the best
+grasps, and a PNG rendering of them."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+from PIL import Image
+
+from affnerf.data.cameras import Intrinsics, look_at
+from affnerf.data.format import check_pose, write_json_atomic
+from affnerf.data.render import Renderer
+from affnerf.errors import input_error
+from affnerf.grasp.gripper import ParallelJawGripper
+from affnerf.grasp.model import GraspObject
+from affnerf.grasp.planner import Grasp
+from affnerf.objects.asset import Material, SurfaceMesh
+from affnerf.vocab import colorize_labels
+
+FORMAT = "affnerf-grasps-1"
+#: Gripper colours in pictures: the best grasp green, the others from yellow to red by rank.
+_BEST, _OTHER = (0.1, 0.75, 0.2), (0.95, 0.6, 0.1)
+
+
+def write_grasps(path: Path, grasps: list[Grasp], mesh: str, affordance: str, gripper: ParallelJawGripper) -> None:
+    """Write ``grasps.json``."""
+    write_json_atomic(
+        path,
+        {
+            "format": FORMAT,
+            "mesh": mesh,
+            "affordance": affordance,
+            "gripper": {"type": "parallel", **gripper.__dict__},
+            "grasps": [g.to_json() for g in grasps],
+        },
+    )
+
+
+def read_grasps(path: Path) -> list[tuple[np.ndarray, float]]:
+    """(pose (4, 4), width) of every grasp in a grasps file.
+
+    Raises:
+        AffnerfError: naming the file, for a missing file, invalid JSON or a wrong schema.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise input_error(path, "file not found")
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise input_error(path, f"not valid JSON ({exc})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("grasps"), list):
+        raise input_error(path, "expected {'grasps': [{'pose': 4x4, 'width': metres}, ...]}")
+    out = []
+    for i, g in enumerate(data["grasps"]):
+        if not isinstance(g, dict) or "pose" not in g or "width" not in g:
+            raise input_error(path, f"grasp {i} needs 'pose' and 'width'")
+        pose = check_pose(g["pose"], path, f"grasp {i} pose")
+        width = g["width"]
+        if not isinstance(width, (int, float)) or not np.isfinite(width) or width < 0:
+            raise input_error(path, f"grasp {i} width must be a non-negative number, got {width!r}")
+        out.append((pose, float(width)))
+    return out
+
+
+def gripper_meshes(grasps: list[Grasp], gripper: ParallelJawGripper) -> list[trimesh.Trimesh]:
+    """One merged gripper mesh per grasp, placed in the object frame."""
+    out = []
+    for g in grasps:
+        parts = gripper.meshes(g.width)
+        mesh = trimesh.util.concatenate(parts)
+        mesh.apply_transform(g.pose)
+        out.append(mesh)
+    return out
+
+
+def object_mesh(obj: GraspObject) -> trimesh.Trimesh:
+    """The object coloured by affordance (grey when unlabelled)."""
+    mesh = trimesh.Trimesh(obj.vertices, obj.faces, process=False)
+    if obj.face_affordance is not None:
+        mesh.visual.face_colors = np.concatenate([colorize_labels(obj.face_affordance), np.full((len(obj.faces), 1), 255)], 1)
+    else:
+        mesh.visual.face_colors = [180, 180, 180, 255]
+    return mesh
+
+
+def export_scene(path: Path, obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 5) -> None:
+    """A GLB scene: the object and gripper models at the ``count`` best grasps."""
+    scene = trimesh.Scene()
+    scene.add_geometry(object_mesh(obj), geom_name="object")
+    for rank, mesh in enumerate(gripper_meshes(grasps[:count], gripper)):
+        mesh.visual.face_colors = [int(255 * c) for c in (_BEST if rank == 0 else _OTHER)] + [255]
+        scene.add_geometry(mesh, geom_name=f"grasp_{rank}")
+    Path(path).write_bytes(scene.export(file_type="glb"))
+
+
+def render_grasps(obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 3, size: int = 320) -> np.ndarray:
+    """(size, 3 * size, 3) uint8 pictures of the object with the ``count`` best grasps, from three sides."""
+    vertices, faces, face_material, materials = [obj.vertices], [obj.faces], [], []
+    labels = obj.face_affordance if obj.face_affordance is not None else np.zeros(len(obj.faces), np.int64)
+    colors = colorize_labels(labels) / 255.0 * 0.6 + 0.35
+    uniq, inverse = np.unique(np.round(colors, 3), axis=0, return_inverse=True)
+    materials += [Material(tuple(c)) for c in uniq]
+    face_material.append(inverse.reshape(-1))
+    offset = len(obj.vertices)
+    for rank, mesh in enumerate(gripper_meshes(grasps[:count], gripper)):
+        vertices.append(mesh.vertices)
+        faces.append(mesh.faces + offset)
+        offset += len(mesh.vertices)
+        face_material.append(np.full(len(mesh.faces), len(materials)))
+        materials.append(Material(_BEST if rank == 0 else _OTHER))
+    f = np.concatenate(faces)
+    surface = SurfaceMesh(
+        vertices=np.concatenate(vertices), faces=f, face_part=np.ones(len(f), np.uint8),
+        face_affordance=np.zeros(len(f), np.uint8), face_material=np.concatenate(face_material).astype(np.int32),
+        face_uv=np.zeros((len(f), 3, 2), np.float32), materials=materials,
+    )  # fmt: skip
+    renderer = Renderer(surface)
+    intr = Intrinsics.from_fov(size, size, np.radians(50))
+    centre = obj.vertices.mean(0)
+    reach = np.ptp(obj.vertices, axis=0).max() * 1.6 + 0.1
+    views = []
+    for yaw in (-90.0, 0.0, 60.0):
+        a = np.radians(yaw)
+        eye = centre + reach * np.array([np.cos(a) * 0.8, np.sin(a) * 0.8, 0.6])
+        views.append(renderer.render(intr, look_at(eye, centre)).rgb)
+    return np.concatenate(views, axis=1)
+
+
+def save_png(path: Path, image: np.ndarray) -> None:
+    Image.fromarray(image).save(path)
+
+
+def summary(grasps: list[Grasp]) -> dict[str, Any]:
+    """Counts and the quality of the grasps, for printing."""
+    eps = [g.epsilon for g in grasps]
+    return {"grasps": len(grasps), "best_epsilon": max(eps, default=0.0), "mean_epsilon": float(np.mean(eps)) if eps else 0.0}

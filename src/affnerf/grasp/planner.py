@@ -1,0 +1,206 @@
+"""Planning parallel-jaw grasps on a (labelled) mesh: antipodal candidates, parallel local search, jaw closing,
+collision check, Ferrari-Canny ranking.
+
+Example:
+    >>> obj = load_grasp_object("affordance_model.ply", need_affordance=True)   # doctest: +SKIP
+    >>> grasps = plan_grasps(obj, PlanConfig(affordance="grasp", num=16))        # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from affnerf.errors import AffnerfError
+from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
+from affnerf.grasp.model import Contacts, GraspObject, close_jaws
+from affnerf.grasp.quality import MU, ferrari_canny
+from affnerf.grasp.refine import RefineConfig, refine_grasps
+from affnerf.vocab import affordance_id
+
+
+@dataclass(frozen=True)
+class PlanConfig:
+    """Settings of the planner.
+
+    Attributes:
+        affordance: restrict contacts to faces of this affordance (``none`` = anywhere).
+        num: grasps returned (best first).
+        candidates: antipodal pairs sampled before the local search (times ``approaches`` grasps are refined).
+        approaches: approach directions tried per pair (around the closing axis).
+        mu: friction coefficient (sampling cone and quality).
+        seed: random seed.
+        refine: the local search (``steps=0`` skips it).
+        surface_samples: surface points of the refinement (and of the collision check, with the vertices).
+        collision_tolerance: penetration of the gripper into the surface still accepted, metres.
+    """
+
+    affordance: str = "none"
+    num: int = 64
+    candidates: int = 64
+    approaches: int = 4
+    mu: float = MU
+    seed: int = 0
+    refine: RefineConfig = field(default_factory=RefineConfig)
+    surface_samples: int = 1500
+    collision_tolerance: float = 0.001
+
+
+@dataclass
+class Grasp:
+    """One planned grasp.
+
+    Attributes:
+        pose: (4, 4) grasp frame in the object's frame (see :mod:`affnerf.grasp.gripper`).
+        width: opening at contact, metres.
+        contacts: (2, 3) contact points of finger 1 and finger 2.
+        epsilon: Ferrari-Canny quality.
+        affordance: affordance names at the two contacts.
+    """
+
+    pose: np.ndarray
+    width: float
+    contacts: np.ndarray
+    epsilon: float
+    affordance: list[str]
+
+    def to_json(self) -> dict:
+        return {
+            "pose": np.round(self.pose, 6).tolist(),
+            "width": round(float(self.width), 6),
+            "contacts": np.round(self.contacts, 6).tolist(),
+            "epsilon": float(self.epsilon),
+            "affordance": list(self.affordance),
+        }
+
+
+def allowed_faces(obj: GraspObject, affordance: str) -> np.ndarray | None:
+    """(F,) bool faces contacts may lie on, or None for anywhere."""
+    if affordance == "none":
+        return None
+    if obj.face_affordance is None:
+        raise AffnerfError(f"{obj.name}: mesh has no 'affordance' property to restrict grasps to {affordance!r}")
+    mask = obj.face_affordance == affordance_id(affordance)
+    if not mask.any():
+        raise AffnerfError(f"{obj.name}: no surface labelled {affordance!r} to grasp")
+    return mask
+
+
+def sample_antipodal(
+    obj: GraspObject, count: int, rng: np.random.Generator, mask: np.ndarray | None, mu: float, gripper: ParallelJawGripper
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Antipodal candidate pairs: a surface point, a ray into the object within half the friction cone, and
+    the surface where it comes out, both on allowed faces and within the opening.
+
+    Returns:
+        centres (K, 3), closing axes (K, 3) from the first point to the second, widths (K,).
+    """
+    points, faces = obj.sample_surface(count * 4, rng, mask)
+    if not len(points):
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    inward = -obj.face_normals[faces]
+    tilt = rng.normal(size=inward.shape) * math.tan(math.atan(mu) / 2.0) / 2.0
+    dirs = inward + tilt - (tilt * inward).sum(1, keepdims=True) * inward
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    ray, face, t, _ = obj.caster.cast(points + 1e-5 * dirs, dirs)
+    exits = (obj.face_normals[face] * dirs[ray]).sum(1) > math.cos(math.atan(mu))  # leaves through a facing side
+    ok = exits & (t < gripper.max_opening - 0.004) & (t > 0.002)
+    if mask is not None:
+        ok &= mask[face]
+    ray, t = ray[ok], t[ok]
+    a, b = points[ray], points[ray] + t[:, None] * dirs[ray]
+    keep = slice(0, count)
+    return ((a + b) / 2.0)[keep], dirs[ray][keep], t[keep]
+
+
+def _approaches(axes: np.ndarray, per_pair: int, rng: np.random.Generator) -> np.ndarray:
+    """(K * per_pair, 3) approach directions around each axis (evenly spaced, randomly phased)."""
+    out = []
+    for axis in axes:
+        helper = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+        u = np.cross(axis, helper)
+        u /= np.linalg.norm(u)
+        v = np.cross(axis, u)
+        phase = rng.uniform(0, 2 * math.pi)
+        for k in range(per_pair):
+            ang = phase + 2 * math.pi * k / per_pair
+            out.append(math.cos(ang) * u + math.sin(ang) * v)
+    return np.asarray(out).reshape(-1, 3)
+
+
+def collides(
+    poses: np.ndarray, widths: np.ndarray, gripper: ParallelJawGripper, points: np.ndarray, tolerance: float, chunk: int = 32
+) -> np.ndarray:
+    """(G,) whether the gripper (at each opening) cuts into the object: surface points (P, 3) deeper than
+    ``tolerance`` inside a finger or the palm."""
+    hit = np.zeros(len(poses), bool)
+    for start in range(0, len(poses), chunk):
+        pose = poses[start : start + chunk]
+        local = np.einsum("gji,gpj->gpi", pose[:, :3, :3], points[None] - pose[:, None, :3, 3])  # (g, P, 3)
+        for k in range(3):
+            boxes = [gripper.boxes(w)[k] for w in widths[start : start + chunk]]
+            centre = np.stack([b[0] for b in boxes])[:, None]
+            half = np.stack([b[1] for b in boxes])[:, None]
+            hit[start : start + chunk] |= np.all(np.abs(local - centre) < half - tolerance, axis=2).any(axis=1)
+    return hit
+
+
+def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, angle_deg: float = 15.0) -> list[int]:
+    """Greedy non-maximum suppression: keep grasps (in ``order``) not too close to an already kept one."""
+    kept: list[int] = []
+    cos_limit = math.cos(math.radians(angle_deg))
+    for i in order:
+        close = False
+        for j in kept:
+            same_place = np.linalg.norm(poses[i, :3, 3] - poses[j, :3, 3]) < distance
+            same_axis = abs(poses[i, :3, 0] @ poses[j, :3, 0]) > cos_limit
+            same_approach = poses[i, :3, 2] @ poses[j, :3, 2] > cos_limit
+            if same_place and same_axis and same_approach:
+                close = True
+                break
+        if not close:
+            kept.append(int(i))
+    return kept
+
+
+def score_contacts(obj: GraspObject, contacts: Contacts, poses: np.ndarray, mu: float = MU) -> np.ndarray:
+    """(G,) Ferrari-Canny epsilon of closed-jaw contacts (0 where the jaws find no valid pair); the friction
+    cones are linearised relative to each grasp's approach axis."""
+    out = np.zeros(len(contacts.valid))
+    for g in np.flatnonzero(contacts.valid):
+        inward = -obj.face_normals[contacts.faces[g]]
+        out[g] = ferrari_canny(contacts.points[g], inward, obj.centroid, obj.radius, mu, reference=poses[g, :3, 2])
+    return out
+
+
+def plan_grasps(obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()) -> list[Grasp]:
+    """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks)."""
+    rng = np.random.default_rng(config.seed)
+    mask = allowed_faces(obj, config.affordance)
+    centres, axes, widths = sample_antipodal(obj, config.candidates, rng, mask, config.mu, gripper)
+    if not len(centres):
+        return []
+    approaches = _approaches(axes, config.approaches, rng)
+    centres, axes, widths = (np.repeat(a, config.approaches, axis=0) for a in (centres, axes, widths))
+    surface, faces = obj.sample_surface(config.surface_samples, rng, mask)
+    if config.refine.steps > 0:
+        centres, axes, approaches, widths = refine_grasps(
+            centres, axes, approaches, widths, surface, obj.face_normals[faces], obj.centroid, obj.radius, gripper,
+            config.refine,
+        )  # fmt: skip
+    poses = np.stack([grasp_pose(c, a, r) for c, a, r in zip(centres, axes, approaches)])
+    contacts = close_jaws(obj, poses, gripper)
+    check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
+    valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
+    if mask is not None:
+        valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
+    epsilon = score_contacts(obj, contacts, poses, config.mu)
+    candidates = np.flatnonzero(valid)
+    order = candidates[np.argsort(-epsilon[candidates], kind="stable")]
+    kept = _suppress(poses, order)[: config.num]
+    return [
+        Grasp(poses[i], float(contacts.width[i]), contacts.points[i], float(epsilon[i]), obj.label_names(contacts.faces[i]))
+        for i in kept
+    ]

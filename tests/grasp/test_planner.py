@@ -1,0 +1,130 @@
+"""Planning grasps: affordance restriction, collision-free results, the local search, the CLI and its errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+import trimesh
+
+from affnerf.cli.main import main
+from affnerf.grasp.gripper import ParallelJawGripper
+from affnerf.grasp.model import GraspObject
+from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal
+from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
+from affnerf.meshio import LabelledMesh, write_labelled_ply
+from affnerf.objects.asset import merge_parts
+from affnerf.objects.registry import make_object, object_seed
+from affnerf.vocab import AFFORDANCE_CLASSES
+
+
+@pytest.fixture(scope="module")
+def screwdriver() -> GraspObject:
+    surface = merge_parts(make_object("screwdriver", object_seed(0, "screwdriver", 2)))
+    return GraspObject(surface.vertices, surface.faces, surface.face_affordance.astype(np.int64), "screwdriver")
+
+
+def test_grasps_restricted_to_an_affordance_touch_only_it(screwdriver):
+    grasps = plan_grasps(screwdriver, PlanConfig(affordance="screw", num=8, refine=RefineConfig(steps=0)))
+    assert grasps
+    assert all(g.affordance == ["screw", "screw"] for g in grasps)
+    assert [g.epsilon for g in grasps] == sorted((g.epsilon for g in grasps), reverse=True)
+
+
+def test_planned_grasps_are_valid_and_collision_free(screwdriver):
+    gripper = ParallelJawGripper()
+    grasps = plan_grasps(screwdriver, PlanConfig(num=10, refine=RefineConfig(steps=5)))
+    assert len(grasps) == 10 and all(g.epsilon > 0 for g in grasps)
+    dense = np.concatenate([screwdriver.sample_surface(20000, np.random.default_rng(9))[0], screwdriver.vertices])
+    poses = np.stack([g.pose for g in grasps])
+    widths = np.array([g.width for g in grasps])
+    assert not collides(poses, widths, gripper, dense, tolerance=0.002).any()
+    assert all(0 < g.width <= gripper.max_opening for g in grasps)
+    for g in grasps:  # both contacts lie on the closing line's pads, opening apart
+        local = (g.contacts - g.pose[:3, 3]) @ g.pose[:3, :3]
+        assert local[0, 0] < 0 < local[1, 0]
+        assert abs((local[1, 0] - local[0, 0]) - g.width) < 1.5e-3  # contacts are patch centres, width the first touch
+
+
+def test_local_search_lowers_the_energy(screwdriver):
+    rng = np.random.default_rng(0)
+    gripper = ParallelJawGripper()
+    centres, axes, widths = sample_antipodal(screwdriver, 32, rng, None, 0.5, gripper)
+    approach = np.cross(axes, np.array([0.0, 0.0, 1.0]))
+    approach /= np.linalg.norm(approach, axis=1, keepdims=True)
+    centres = centres + rng.normal(0, 0.004, centres.shape)  # knocked off the surface
+    surface, faces = screwdriver.sample_surface(1500, rng)
+    normals = screwdriver.face_normals[faces]
+    config = RefineConfig(steps=30)
+    args = (torch.tensor(surface, dtype=torch.float32), torch.tensor(normals, dtype=torch.float32),
+            torch.tensor(screwdriver.centroid, dtype=torch.float32), screwdriver.radius, gripper, config)  # fmt: skip
+
+    def energy(c, a, r, w):
+        t = [torch.tensor(np.asarray(x), dtype=torch.float32) for x in (c, a, r, w)]
+        return grasp_energy(*t, *args).detach().numpy()
+
+    before = energy(centres, axes, approach, widths)
+    after = energy(*refine_grasps(centres, axes, approach, widths, surface, normals, screwdriver.centroid, screwdriver.radius, gripper, config))
+    assert np.median(after) < 0.5 * np.median(before)
+
+
+def _write(path, mesh: trimesh.Trimesh, labels=True, poison=False):
+    vertices = np.array(mesh.vertices, np.float64)
+    if poison:
+        vertices[0, 0] = np.nan
+    props = {"affordance": np.ones(len(mesh.faces), np.uint8)} if labels else {}
+    write_labelled_ply(path, LabelledMesh(vertices, np.asarray(mesh.faces), face_props=props))
+    return path
+
+
+def test_cli_plans_and_scores(tmp_path, capsys):
+    mesh = _write(tmp_path / "box.ply", trimesh.creation.box(extents=(0.04, 0.05, 0.12)))
+    out = tmp_path / "g"
+    assert main(["grasp", "--mesh", str(mesh), "--affordance", "grasp", "--num", "4", "--refine-steps", "3", "--out", str(out)]) == 0
+    data = json.loads((out / "grasps.json").read_text())
+    assert len(data["grasps"]) == 4 and data["affordance"] == "grasp"
+    g0 = data["grasps"][0]
+    assert np.asarray(g0["pose"]).shape == (4, 4) and len(g0["contacts"]) == 2 and g0["affordance"] == ["grasp"] * 2
+    assert (out / "grasps.glb").stat().st_size > 0 and (out / "grasps.png").stat().st_size > 0
+    capsys.readouterr()
+    assert main(["grasp", "score", "--mesh", str(mesh), "--grasps", str(out / "grasps.json"), "--out", str(tmp_path / "s.json")]) == 0
+    scores = json.loads((tmp_path / "s.json").read_text())["scores"]
+    assert scores[0]["epsilon"] == pytest.approx(g0["epsilon"], rel=1e-3)  # the file rounds poses to micrometres
+    assert scores[0]["affordance"] == ["grasp", "grasp"]
+    assert AFFORDANCE_CLASSES[1] == "grasp"
+
+
+@pytest.mark.parametrize(
+    "case, expected",
+    [
+        ("unlabelled", r"box\.ply: mesh has no 'affordance' property"),
+        ("nonfinite", r"box\.ply: mesh has non-finite vertices"),
+        ("empty", r"box\.ply: mesh has no faces"),
+        ("bad_grasps", r"grasps\.json: grasp 0 needs 'pose' and 'width'"),
+        ("nan_pose", r"grasps\.json: grasp 0 pose has NaN"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, case, expected):
+    import re
+
+    box = trimesh.creation.box(extents=(0.04, 0.05, 0.12))
+    path = tmp_path / "box.ply"
+    if case == "empty":
+        path.write_text("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+                        "element face 0\nproperty list uchar int vertex_indices\nend_header\n")  # fmt: skip
+    else:
+        _write(path, box, labels=case != "unlabelled", poison=case == "nonfinite")
+    if case in ("bad_grasps", "nan_pose"):
+        grasps = tmp_path / "grasps.json"
+        pose = np.eye(4).tolist()
+        if case == "nan_pose":
+            pose[0][3] = float("nan")
+        grasps.write_text(json.dumps({"grasps": [{"pose": pose, "width": 0.04} if case == "nan_pose" else {"width": 1}]}))
+        code = main(["grasp", "score", "--mesh", str(path), "--grasps", str(grasps)])
+    else:
+        code = main(["grasp", "--mesh", str(path), "--affordance", "grasp", "--out", str(tmp_path / "o")])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(expected, err[0]), err
