@@ -1,34 +1,32 @@
-"""``affnerf demo``: the main job on a fresh machine, end to end at a small scale."""
+"""``affnerf demo``: the main job on a fresh machine."""
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
+from typing import Annotated
+
+import tyro
+
+from affnerf.demo.runner import DemoConfig
 
 
-def demo(out: Path = Path("demo_out"), objects_per_category: int = 3, views: int = 12, workers: int = 2) -> None:
-    """Generate a small dataset of all eight categories, then write its preview sheet and statistics.
+def demo(config: Annotated[DemoConfig, tyro.conf.arg(name="")]) -> None:
+    """Predict a 3D affordance model and plan grasps for every example image with the shipped model, and write
+    OUT/report.html (inputs, turntables, labelled meshes, grasps, the model's metrics).
 
-    Args:
-        out: output folder (the dataset goes to OUT/dataset).
-        objects_per_category: objects of each category.
-        views: views per object.
-        workers: rendering processes.
+    With --train, run the whole pipeline from scratch at a small scale instead (generate a dataset, train the small
+    configuration, evaluate, predict, grasp) and print how long each stage took.
     """
-    from affnerf.data.format import write_json_atomic
-    from affnerf.data.generate import GenerateConfig, generate_dataset
-    from affnerf.data.preview import write_preview
-    from affnerf.data.stats import dataset_stats
+    from affnerf.demo.runner import repository_examples, run_examples
+    from affnerf.predict.shipped import shipped_model
 
-    out = Path(out)
-    dataset = out / "dataset"
-    t0 = time.perf_counter()
-    report = generate_dataset(
-        GenerateConfig(out=dataset, objects_per_category=objects_per_category, views=views, workers=workers)
-    )
-    print(f"[generate] {len(report.made)} objects made, {len(report.skipped)} reused, {time.perf_counter() - t0:.1f} s")
-    sheet = write_preview(dataset, out / "preview.png", objects=8, views=3)
-    stats = dataset_stats(dataset)
-    write_json_atomic(out / "stats.json", stats.to_json())
-    print(stats.table())
-    print(f"dataset: {dataset}\npreview sheet: {sheet}\nstatistics: {out / 'stats.json'}")
+    if config.train:
+        from affnerf.demo.pipeline import run_pipeline
+
+        summary = run_pipeline(config)
+        print("stages:", ", ".join(f"{k} {v:.0f} s" for k, v in summary["stages_seconds"].items()))
+        print(f"report: {summary['report']}")
+        return
+    run = config.run if config.run is not None else shipped_model()
+    examples = config.examples if config.examples is not None else repository_examples()
+    report = run_examples(config, run, examples)
+    print(f"report: {report.resolve()}")

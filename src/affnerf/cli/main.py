@@ -18,6 +18,7 @@ from affnerf.errors import AffnerfError
 def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     """The command tree (``args`` lets ``train`` take its defaults from the preset they name)."""
     from affnerf.cli import data, demo, evaluate, grasp
+    from affnerf.cli.bench import bench
     from affnerf.cli.predict import predict
     from affnerf.cli.train import make_train_command
 
@@ -28,6 +29,7 @@ def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     app.command(evaluate.app, name="eval", help="Evaluate like the paper's Table 2 (and, with `eval grasp`, Table 3).")
     app.command(evaluate.metrics, name="metrics")
     app.command(grasp.app, name="grasp", help="Plan parallel-jaw grasps on a labelled mesh, or score given grasps.")
+    app.command(bench, name="bench")
     app.command(demo.demo, name="demo", help="Run the whole pipeline at a small scale on this machine.")
     return app
 
@@ -61,6 +63,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"affnerf: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into a program that stopped reading (e.g. head)
+        return 0
     except OSError as exc:  # e.g. a read-only or full disk: name the file, keep it to one line
         if debug:
             raise

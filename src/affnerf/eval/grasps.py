@@ -77,7 +77,8 @@ def predicted_object(loaded: LoadedModel, obj: ObjectData, view: int, resolution
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
     encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
     density, labels = model.point_fields(encoding)
-    return GraspObject.from_mesh(extract_labelled_mesh(density, labels, resolution, level), f"{obj.record.object_id} (predicted)")
+    mesh = extract_labelled_mesh(density, labels, resolution, level, occupancy=model.occupancy(encoding))
+    return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
 
 
 def _lift(gt: GraspObject, grasps: list, count: int) -> list[bool]:

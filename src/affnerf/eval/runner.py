@@ -32,7 +32,8 @@ class EvalConfig:
             not used by ``semantic-nerf`` and ``constant``).
         data: the dataset.
         out: output folder.
-        split: ``test`` (held-out instances), ``unseen`` (held-out categories) or ``val``.
+        split: ``test`` (held-out instances), ``unseen`` (held-out categories), ``val``, or ``all`` (every object,
+            e.g. of a category a leave-one-category-out run never saw).
         method: one or more of affnerf, pixelnerf, semantic-nerf, retrieval, constant (comma-separated).
         input_views: views each method is given (1: single image; PixelNeRF-M is also run with 3, Semantic-NeRF
             with 20 as a many-view reference).
@@ -50,7 +51,7 @@ class EvalConfig:
     run: Path
     data: Path
     out: Path
-    split: Literal["test", "unseen", "val"] = "test"
+    split: Literal["test", "unseen", "val", "all"] = "test"
     method: str = "affnerf"
     input_views: int = 1
     target_views: int = 20
@@ -75,7 +76,7 @@ def parse_methods(text: str) -> list[str]:
 
 def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
     cats = [c.strip() for c in config.categories.split(",") if c.strip()] or None
-    entries = ds.objects(split=config.split, categories=cats)
+    entries = ds.objects(split=None if config.split == "all" else config.split, categories=cats)
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no objects in split {config.split!r}")
     by_cat: dict[str, list] = {}

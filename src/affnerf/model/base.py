@@ -12,6 +12,7 @@ from torch import nn
 from affnerf.model.config import ModelConfig
 from affnerf.model.field import ConditionalField
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
+from affnerf.rendering.grid import OccupancyGrid, build_grid
 
 
 class ConditionedNeRF(nn.Module, ABC):
@@ -60,6 +61,24 @@ class ConditionedNeRF(nn.Module, ABC):
         return self.renderer.render_rays(
             self.condition(encoding, ray_object), origins, dirs, background, perturb, generator
         )
+
+    def render_rays_in_grid(
+        self,
+        encoding: Any,
+        grid: OccupancyGrid,
+        origins: torch.Tensor,
+        dirs: torch.Tensor,
+        background: torch.Tensor,
+        num: int = 32,
+    ) -> RayOutputs:
+        """Render rays of one encoded object with empty-space skipping (see :meth:`FieldRenderer.render_rays_in_grid`)."""
+        obj = torch.zeros(len(origins), dtype=torch.long, device=origins.device)
+        return self.renderer.render_rays_in_grid(self.condition(encoding, obj), grid, origins, dirs, background, num)
+
+    def occupancy(self, encoding: Any, resolution: int = 64, threshold: float = 1.0) -> OccupancyGrid:
+        """The occupancy grid of one encoded object's density (evaluated once; see :mod:`affnerf.rendering.grid`)."""
+        density, _ = self.point_fields(encoding)
+        return build_grid(density, resolution, threshold, device=next(self.parameters()).device)
 
     def forward(
         self,

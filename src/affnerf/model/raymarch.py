@@ -16,6 +16,7 @@ from torch import nn
 from affnerf.model.config import ModelConfig
 from affnerf.model.field import ConditionalField
 from affnerf.objects.asset import CANONICAL_HALF_EXTENT
+from affnerf.rendering.grid import OccupancyGrid, occupied_samples
 from affnerf.rendering.rays import intersect_aabb
 from affnerf.rendering.samplers import merge_samples, pdf_samples, stratified_samples
 from affnerf.rendering.volume import (
@@ -106,6 +107,7 @@ class FieldRenderer(nn.Module):
 
         self.coarse = field()
         self.fine = field() if config.num_fine > 0 else None
+        self.points_evaluated = 0  # field evaluations so far (for benchmarks)
 
     def ray_bounds(self, origins: torch.Tensor, dirs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """(R,) start, end, and whether each ray is sampled at all (the cube clip, or the full range)."""
@@ -126,14 +128,17 @@ class FieldRenderer(nn.Module):
         rays: torch.Tensor,
         condition: Condition,
         background: torch.Tensor,
+        deltas: torch.Tensor | None = None,
     ) -> RayOutputs:
         r, s = t.shape
         points = (origins[:, None, :] + t[..., None] * dirs[:, None, :]).reshape(-1, 3)
         unit = dirs / dirs.norm(dim=-1, keepdim=True)
         ray_of_point = rays[:, None].expand(r, s).reshape(-1)
+        self.points_evaluated += len(points)
         trunk_in, color_in = condition(points, ray_of_point)
         out = field(points, unit[:, None, :].expand(r, s, 3).reshape(-1, 3), trunk_in, color_in)
-        weights, trans = weights_from_density(out.sigma.reshape(r, s), sample_deltas(t, far))
+        deltas = sample_deltas(t, far) if deltas is None else deltas
+        weights, trans = weights_from_density(out.sigma.reshape(r, s), deltas)
         opacity = weights.sum(dim=-1)
         probs = torch.softmax(out.logits.reshape(r, s, out.logits.shape[-1]), dim=-1)
         return RayOutputs(
@@ -144,6 +149,28 @@ class FieldRenderer(nn.Module):
             t=t,
             weights=weights,
         )
+
+    def render_rays_in_grid(
+        self,
+        condition: Condition,
+        grid: OccupancyGrid,
+        origins: torch.Tensor,
+        dirs: torch.Tensor,
+        background: torch.Tensor,
+        num: int = 32,
+        candidates: int = 128,
+    ) -> RayOutputs:
+        """Inference fast path: ``num`` samples per ray spread over the occupied cells of ``grid``, evaluated by
+        the fine field only (the coarse field without one); rays crossing no occupied cell render background
+        without evaluating the field."""
+        near, far, inside = intersect_aabb(origins, dirs, grid.half_extent, self.config.near, self.config.far)
+        t, step, hit = occupied_samples(grid, origins, dirs, near, far, num, candidates)
+        hit = hit & inside
+        idx = torch.nonzero(hit, as_tuple=True)[0]
+        field = self.fine if self.fine is not None else self.coarse
+        deltas = step[idx, None].expand(len(idx), num)
+        out = self._stage(field, t[idx], far[idx], origins[idx], dirs[idx], idx, condition, background[idx], deltas)
+        return scatter_rays(out, hit, background)
 
     def render_rays(
         self,

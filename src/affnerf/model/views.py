@@ -11,6 +11,7 @@ import torch
 from affnerf.data.cameras import Intrinsics
 from affnerf.model.affnerf import Codes
 from affnerf.model.base import ConditionedNeRF
+from affnerf.rendering.grid import OccupancyGrid
 from affnerf.rendering.rays import pixel_rays
 
 
@@ -44,6 +45,8 @@ def render_view(
     c2w: np.ndarray,
     background: tuple[float, float, float] | np.ndarray = (1.0, 1.0, 1.0),
     chunk: int = 1024,
+    grid: OccupancyGrid | None = None,
+    grid_samples: int = 32,
 ) -> RenderedView:
     """Render every pixel of a camera for one object.
 
@@ -54,6 +57,8 @@ def render_view(
         c2w: (4, 4) camera-to-world pose in the canonical frame.
         background: RGB in [0, 1].
         chunk: rays per forward pass (on a CPU about a thousand is fastest: larger chunks spill the caches).
+        grid: the object's occupancy grid: render with empty-space skipping, ``grid_samples`` per ray (fast path);
+            None renders coarse-to-fine as in training.
     """
     device = next(model.parameters()).device
     h, w = intrinsics.height, intrinsics.width
@@ -67,8 +72,11 @@ def render_view(
         o = origins[start : start + chunk].float().to(device)
         d = dirs[start : start + chunk].float().to(device)
         n = o.shape[0]
-        coarse, fine = model.render_rays(encoding, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
-        out = fine if fine is not None else coarse
+        if grid is not None:
+            out = model.render_rays_in_grid(encoding, grid, o, d, bg.expand(n, 3), grid_samples)
+        else:
+            coarse, fine = model.render_rays(encoding, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
+            out = fine if fine is not None else coarse
         rgb.append(out.rgb.cpu())
         opacity.append(out.opacity.cpu())
         depth.append((out.depth / out.opacity.clamp(min=1e-6)).cpu())

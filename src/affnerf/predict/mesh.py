@@ -15,6 +15,7 @@ from skimage import measure
 
 from affnerf.meshio import LabelledMesh
 from affnerf.objects.asset import CANONICAL_HALF_EXTENT
+from affnerf.rendering.grid import OccupancyGrid
 from affnerf.vocab import colorize_labels
 
 PointFn = Callable[[torch.Tensor], torch.Tensor]
@@ -30,7 +31,11 @@ def grid_axis(resolution: int, half_extent: float = CANONICAL_HALF_EXTENT) -> np
 
 @torch.no_grad()
 def evaluate_grid(
-    fn: PointFn, resolution: int, half_extent: float = CANONICAL_HALF_EXTENT, chunk: int = 65536
+    fn: PointFn,
+    resolution: int,
+    half_extent: float = CANONICAL_HALF_EXTENT,
+    chunk: int = 65536,
+    occupancy: OccupancyGrid | None = None,
 ) -> np.ndarray:
     """Evaluate a scalar field on a cubic grid.
 
@@ -39,16 +44,21 @@ def evaluate_grid(
         resolution: samples per axis.
         half_extent: the grid spans [-half_extent, half_extent]^3.
         chunk: points per call.
+        occupancy: evaluate only at points in its occupied cells; the others get 0 (empty space skipping).
 
     Returns:
         (R, R, R) float32 values indexed [x, y, z].
     """
     axis = torch.from_numpy(grid_axis(resolution, half_extent)).float()
-    out = np.empty(resolution**3, np.float32)
+    out = np.zeros(resolution**3, np.float32)
     xs, ys, zs = torch.meshgrid(axis, axis, axis, indexing="ij")
     points = torch.stack([xs.reshape(-1), ys.reshape(-1), zs.reshape(-1)], dim=-1)
-    for start in range(0, len(points), chunk):
-        out[start : start + chunk] = fn(points[start : start + chunk]).float().cpu().numpy()
+    index = torch.arange(len(points))
+    if occupancy is not None:
+        index = index[occupancy.lookup(points)]
+    for start in range(0, len(index), chunk):
+        sel = index[start : start + chunk]
+        out[sel.numpy()] = fn(points[sel]).float().cpu().numpy()
     return out.reshape(resolution, resolution, resolution)
 
 
@@ -93,14 +103,16 @@ def extract_labelled_mesh(
     level: float = DEFAULT_LEVEL,
     half_extent: float = CANONICAL_HALF_EXTENT,
     chunk: int = 65536,
+    occupancy: OccupancyGrid | None = None,
 ) -> LabelledMesh:
-    """Marching cubes on ``density`` with vertex and face affordance labels from ``labels``.
+    """Marching cubes on ``density`` with vertex and face affordance labels from ``labels`` (density evaluated
+    only in the occupied cells of ``occupancy`` when given).
 
     Returns:
         A :class:`LabelledMesh` with the vertex property ``affordance``, the face property ``affordance`` and
         vertex colours of the classes (no faces if the density never reaches ``level``).
     """
-    volume = evaluate_grid(density, resolution, half_extent, chunk)
+    volume = evaluate_grid(density, resolution, half_extent, chunk, occupancy)
     vertices, faces = marching_cubes(volume, level, half_extent)
     vertex_labels = evaluate_points(labels, vertices, chunk).astype(np.int64) if len(vertices) else np.zeros(0, np.int64)
     return LabelledMesh(

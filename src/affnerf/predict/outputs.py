@@ -45,6 +45,7 @@ class PredictConfig:
         level: density of the extracted surface.
         device: ``auto``, ``cpu`` or ``cuda``.
         chunk: rays per forward pass.
+        fast: render and extract the mesh with the object's occupancy grid (empty-space skipping).
     """
 
     image: Path
@@ -60,6 +61,7 @@ class PredictConfig:
     level: float = DEFAULT_LEVEL
     device: str = "auto"
     chunk: int = 1024
+    fast: bool = True
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:

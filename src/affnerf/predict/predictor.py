@@ -26,14 +26,16 @@ from affnerf.model.views import RenderedView, render_view
 from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import DEFAULT_LEVEL, extract_labelled_mesh
+from affnerf.rendering.grid import OccupancyGrid
 
 
 @dataclass
 class EncodedObject:
-    """An object seen in one image: its codes and how its image was prepared."""
+    """An object seen in one image: its codes, how its image was prepared, and (once built) its occupancy grid."""
 
     codes: Codes
-    prepared: PreparedImage
+    prepared: PreparedImage | None = None
+    grid: OccupancyGrid | None = None
 
 
 def turntable_poses(count: int, elevation_deg: float = 25.0, radius: float = 0.75) -> np.ndarray:
@@ -60,19 +62,45 @@ def pick_device(name: str) -> torch.device:
 
 
 class Predictor:
-    """A trained model with the operations of prediction."""
+    """A trained model with the operations of prediction.
 
-    def __init__(self, loaded: LoadedModel, chunk: int = 1024) -> None:
+    Args:
+        loaded: the model.
+        chunk: rays per forward pass.
+        fast: render and extract meshes with the object's occupancy grid (empty-space skipping); False renders
+            coarse-to-fine as in training and evaluates the density everywhere.
+        grid_resolution: cells per side of the occupancy grid.
+        grid_threshold: density above which a cell is occupied.
+        grid_samples: samples per ray inside occupied cells.
+    """
+
+    def __init__(
+        self,
+        loaded: LoadedModel,
+        chunk: int = 1024,
+        fast: bool = True,
+        grid_resolution: int = 64,
+        grid_threshold: float = 5.0,
+        grid_samples: int = 32,
+    ) -> None:
         self.loaded = loaded
         self.chunk = chunk
+        self.fast = fast
+        self.grid_resolution, self.grid_threshold, self.grid_samples = grid_resolution, grid_threshold, grid_samples
 
     @classmethod
-    def load(cls, path: Path, device: str = "auto", chunk: int = 1024) -> Predictor:
+    def load(cls, path: Path, device: str = "auto", chunk: int = 1024, **options: object) -> Predictor:
         """Load from a run folder or checkpoint file (an AFF-NeRF: prediction from a photo needs no pose)."""
         loaded = load_model(Path(path), pick_device(device))
         if loaded.model.config.kind != "affnerf":
             raise input_error(loaded.path, f"a {loaded.model.config.kind} model needs the input camera's pose; predict from photos with an AFF-NeRF run")
-        return cls(loaded, chunk)
+        return cls(loaded, chunk, **options)  # type: ignore[arg-type]
+
+    def grid(self, obj: EncodedObject) -> OccupancyGrid:
+        """The object's occupancy grid, built on first use."""
+        if obj.grid is None:
+            obj.grid = self.loaded.model.occupancy(obj.codes, self.grid_resolution, self.grid_threshold)
+        return obj.grid
 
     @property
     def classes(self) -> list[str]:
@@ -90,13 +118,14 @@ class Predictor:
         prepared = prepare_image(Path(image), size, self.loaded.background, mask)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
 
-    def render(self, obj: EncodedObject | Codes, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
+    def render(self, obj: EncodedObject, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
         """Render the object from a camera in its canonical frame."""
-        codes = obj.codes if isinstance(obj, EncodedObject) else obj
-        return render_view(self.loaded.model, codes, intrinsics, c2w, self.loaded.background, self.chunk)
+        grid = self.grid(obj) if self.fast else None
+        return render_view(self.loaded.model, obj.codes, intrinsics, c2w, self.loaded.background, self.chunk,
+                           grid, self.grid_samples)  # fmt: skip
 
-    def mesh(self, obj: EncodedObject | Codes, resolution: int = 128, level: float = DEFAULT_LEVEL) -> LabelledMesh:
+    def mesh(self, obj: EncodedObject, resolution: int = 128, level: float = DEFAULT_LEVEL) -> LabelledMesh:
         """The labelled mesh of the object (marching cubes in the canonical cube)."""
-        codes = obj.codes if isinstance(obj, EncodedObject) else obj
-        density, labels = self.loaded.model.point_fields(codes)
-        return extract_labelled_mesh(density, labels, resolution, level, chunk=65536)
+        density, labels = self.loaded.model.point_fields(obj.codes)
+        occupancy = self.grid(obj) if self.fast else None
+        return extract_labelled_mesh(density, labels, resolution, level, chunk=65536, occupancy=occupancy)

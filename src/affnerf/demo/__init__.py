@@ -1,0 +1,1 @@
+"""The demo: example images, predicting and grasping on each, and an HTML report of it all."""
