@@ -89,6 +89,7 @@ def tiny_train_config(train_dataset, tmp_path):
             progress=False,
             device="cpu",
             cache_dir=tmp_path / "cache",
+            image_scale=1.0,
         )
         return replace(base, **overrides)
 
@@ -106,7 +107,7 @@ def trained_runs(train_dataset, tmp_path_factory) -> dict[str, Path]:
         config = replace(
             SMALL, data=train_dataset, out=root / kind, steps=30, model=replace(TINY_MODEL, kind=kind), rays_per_step=128,
             objects_per_step=2, input_views=views, checkpoint_every=30, log_every=10, val_every=0, progress=False,
-            device="cpu", cache_dir=root / f"cache-{kind}",
+            device="cpu", cache_dir=root / f"cache-{kind}", image_scale=1.0,
         )  # fmt: skip
         train(config)
         runs[kind] = config.out

@@ -14,7 +14,7 @@ from affnerf.eval.protocol import METRIC_KEYS
 
 def _eval(run, data, out, method, *extra):
     return main(["eval", "--run", str(run), "--data", str(data), "--split", "test", "--method", method,
-                 "--out", str(out), "--target-views", "3", "--scale", "0.5", "--semantic-steps", "20", "--device", "cpu",
+                 "--out", str(out), "--target-views", "3", "--scale", "0.25", "--semantic-steps", "10", "--device", "cpu",
                  *extra])  # fmt: skip
 
 

@@ -13,7 +13,7 @@ def test_two_processes_keep_identical_replicas_and_reduce_the_loss(tiny_train_co
     m = config.model
     args = [
         sys.executable, "-m", "torch.distributed.run", "--nproc_per_node", "2", "--standalone",
-        "-m", "affnerf.cli.main", "train", "--data", str(config.data), "--out", str(config.out), "--config", "small",
+        "-m", "affnerf.cli.main", "train", "--data", str(config.data), "--out", str(config.out), "--config", "small", "--image-scale", "1.0",
         "--steps", "24", "--checkpoint-every", "12", "--log-every", "1", "--val-every", "0", "--no-progress",
         "--device", "cpu", "--cache-dir", str(config.cache_dir), "--rays-per-step", "128", "--objects-per-step", "1",
         "--model.encoder-width", str(m.encoder_width), "--model.encoder-resolution", str(m.encoder_resolution),

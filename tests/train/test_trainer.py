@@ -80,7 +80,7 @@ def test_existing_run_needs_resume_and_keeps_its_checkpoints(tiny_train_config):
 
 def _cli(config, *extra):
     return [
-        "train", "--data", str(config.data), "--out", str(config.out), "--config", "small", "--steps", "10",
+        "train", "--data", str(config.data), "--out", str(config.out), "--config", "small", "--image-scale", "1.0", "--steps", "10",
         "--model.encoder-width", "0.125", "--model.encoder-resolution", "32", "--model.field-width", "32",
         "--model.field-depth", "2", "--model.color-width", "16", "--model.affordance-width", "16",
         "--model.num-coarse", "8", "--model.num-fine", "8", "--rays-per-step", "64", "--objects-per-step", "2",
@@ -122,3 +122,14 @@ def test_run_folder_reproduces_its_config(tiny_train_config, tmp_path, capsys):
     wa = torch.load(config.out / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
     wb = torch.load(again / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
     assert all(torch.equal(wa[k], wb[k]) for k in wa)
+
+
+def test_validation_renders_and_scores_held_out_objects(trained_runs, train_dataset):
+    from affnerf.predict.loading import load_model
+    from affnerf.train.validate import validate
+
+    loaded = load_model(trained_runs["affnerf"])
+    ds = Dataset.open(train_dataset)
+    result = validate(loaded.model, [ds.load_object(e) for e in ds.objects(split="val")], 0.5, views_per_object=2)
+    assert len(result.images) == 2 and result.images[0].shape == (15, 5 * 20, 3)
+    assert 0 <= result.miou <= 1 and 0 <= result.accuracy <= 1 and result.psnr > 0

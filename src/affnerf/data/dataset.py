@@ -98,8 +98,29 @@ class Dataset:
     def affordance_classes(self) -> list[str]:
         return self.index.affordance_classes
 
-    def objects(self, split: str | None = None, categories: list[str] | None = None) -> list[IndexEntry]:
-        """Index entries, filtered by split and categories when given."""
+    @property
+    def categories(self) -> list[str]:
+        """The categories of the listed objects."""
+        return sorted({o.category for o in self.index.objects})
+
+    def objects(self, split: str | None = None, categories: list[str] | str | None = None) -> list[IndexEntry]:
+        """Index entries, filtered by split and categories when given.
+
+        Args:
+            split: one split, or None for every split.
+            categories: names, a comma-separated string of names (empty = all), or None for all.
+
+        Raises:
+            AffnerfError: naming ``dataset.json``, for a category the dataset does not have.
+        """
+        if isinstance(categories, str):
+            categories = [c.strip() for c in categories.split(",") if c.strip()] or None
+        if categories is not None:
+            unknown = sorted(set(categories) - set(self.categories))
+            if unknown:
+                raise input_error(
+                    self.root / "dataset.json", f"unknown category {', '.join(unknown)} (this dataset has: {', '.join(self.categories)})"
+                )
         return [
             o
             for o in self.index.objects
@@ -119,4 +140,6 @@ class Dataset:
         data = ObjectData.open(folder)
         if data.record.affordance_classes != self.affordance_classes:
             raise input_error(folder / "transforms.json", "affordance_classes differ from dataset.json")
+        if data.record.category != entry.category:
+            raise input_error(folder / "transforms.json", f"category {data.record.category!r}, dataset.json says {entry.category!r}")
         return data

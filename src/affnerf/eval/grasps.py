@@ -175,7 +175,7 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
     if loaded.model.config.kind != "affnerf":
         raise AffnerfError(f"{loaded.path}: grasp evaluation predicts affordance models with an AFF-NeRF run")
     cats = [c.strip() for c in config.categories.split(",") if c.strip()]
-    entries = ds.objects(split=config.split, categories=cats)
+    entries = ds.objects(config.split, cats)
     if config.max_objects:
         entries = [e for c in cats for e in [x for x in entries if x.category == c][: config.max_objects]]
     if not entries:

@@ -46,6 +46,7 @@ class EvalConfig:
         device: ``auto``, ``cpu`` or ``cuda``.
         chunk: rays per forward pass.
         figure_objects: example objects in the figure (one per category, up to this many).
+        fast: render every method with its objects' occupancy grids (empty-space skipping).
     """
 
     run: Path
@@ -63,6 +64,7 @@ class EvalConfig:
     device: str = "auto"
     chunk: int = 1024
     figure_objects: int = 8
+    fast: bool = True
 
 
 def parse_methods(text: str) -> list[str]:
@@ -75,8 +77,7 @@ def parse_methods(text: str) -> list[str]:
 
 
 def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
-    cats = [c.strip() for c in config.categories.split(",") if c.strip()] or None
-    entries = ds.objects(split=None if config.split == "all" else config.split, categories=cats)
+    entries = ds.objects(None if config.split == "all" else config.split, config.categories)
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no objects in split {config.split!r}")
     by_cat: dict[str, list] = {}
@@ -108,7 +109,8 @@ def build_method(name: str, config: EvalConfig, ds: Dataset) -> Method:
     if name == "constant":
         return ConstantMethod(0)
     if name == "semantic-nerf":
-        return SemanticNeRFMethod(len(ds.affordance_classes), SemanticNeRFConfig(steps=config.semantic_steps), config.chunk)
+        return SemanticNeRFMethod(len(ds.affordance_classes), SemanticNeRFConfig(steps=config.semantic_steps), config.chunk,
+                                  config.fast)  # fmt: skip
     loaded = load_model(config.run, pick_device(config.device))
     kind = loaded.model.config.kind
     wanted = "pixelnerf" if name == "pixelnerf" else "affnerf"
@@ -118,7 +120,7 @@ def build_method(name: str, config: EvalConfig, ds: Dataset) -> Method:
         raise AffnerfError(f"{loaded.path}: trained with other affordance classes than {ds.root / 'dataset.json'}")
     if name == "retrieval":
         return RetrievalMethod(loaded, ds)
-    return ConditionedNeRFMethod(loaded, config.chunk)
+    return ConditionedNeRFMethod(loaded, config.chunk, config.fast)
 
 
 def method_label(name: str, input_views: int) -> str:

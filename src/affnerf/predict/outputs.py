@@ -46,6 +46,7 @@ class PredictConfig:
         device: ``auto``, ``cpu`` or ``cuda``.
         chunk: rays per forward pass.
         fast: render and extract the mesh with the object's occupancy grid (empty-space skipping).
+        grid_threshold: density above which a cell of the occupancy grid counts as occupied.
     """
 
     image: Path
@@ -62,6 +63,7 @@ class PredictConfig:
     device: str = "auto"
     chunk: int = 1024
     fast: bool = True
+    grid_threshold: float = 5.0
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
@@ -71,6 +73,7 @@ def export_glb(path: Path, mesh: LabelledMesh) -> None:
 
 
 def _gif(frames: list[np.ndarray], path: Path) -> None:
+    """An endlessly looping GIF, 120 ms a frame (identical neighbours are merged into one longer frame)."""
     images = [Image.fromarray(f) for f in frames]
     images[0].save(path, save_all=True, append_images=images[1:], duration=120, loop=0)
 

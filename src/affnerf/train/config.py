@@ -100,8 +100,9 @@ class TrainConfig:
 #: [0.1, 1.5] m range, 1024 rays a step, Adam at 5e-4, lambda 4e-4, 400x300 images.
 PAPER = TrainConfig(data=Path("."), out=Path("."))
 
-#: For 2 CPU cores, chosen by measurement (benchmarks/README.md): quarter-width encoders on 64-pixel crops, a
-#: 4-layer 96-wide field, 32 + 32 samples inside the canonical cube, 512 rays over 4 objects, lambda 4e-2.
+#: For 2 CPU cores, chosen by measurement (benchmarks/README.md, results/small_config.json): quarter-width
+#: encoders on 64-pixel crops, a 4-layer 64-wide field, 24 + 24 samples inside the canonical cube, 256 rays over
+#: 4 objects a step, training at a quarter of the dataset's resolution, lambda 4e-2.
 SMALL = replace(
     PAPER,
     config="small",
@@ -109,21 +110,21 @@ SMALL = replace(
     model=ModelConfig(
         encoder_width=0.25,
         encoder_resolution=64,
-        field_width=96,
+        field_width=64,
         field_depth=4,
-        color_width=48,
-        affordance_width=48,
-        num_coarse=32,
-        num_fine=32,
+        color_width=32,
+        affordance_width=32,
+        num_coarse=24,
+        num_fine=24,
         clip_to_cube=True,
     ),
     optim=OptimConfig(lr=1e-3, lr_final=1e-4),
-    rays_per_step=512,
+    rays_per_step=256,
     affordance_weight=4e-2,
-    image_scale=1.0,
-    checkpoint_every=500,
-    log_every=25,
-    val_every=1000,
+    image_scale=0.25,
+    checkpoint_every=1000,
+    log_every=50,
+    val_every=2000,
     val_scale=0.5,
 )
 

@@ -59,14 +59,9 @@ class TrainSummary:
     seconds: float = 0.0
 
 
-def _select_objects(ds: Dataset, split: str, categories: str) -> list:
-    cats = [c.strip() for c in categories.split(",") if c.strip()] or None
-    return ds.objects(split=split, categories=cats)
-
-
 def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> list[ObjectFrames]:
     """Decode (once) and memory-map the training objects' frames; ranks share the decoding work."""
-    entries = _select_objects(ds, "train", config.categories)
+    entries = ds.objects("train", config.categories)
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no training objects (split train, categories {config.categories or 'all'})")
     cache = Path(config.cache_dir) if config.cache_dir else Path(config.out) / "cache"
@@ -80,7 +75,7 @@ def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> l
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
-    entries = _select_objects(ds, "val", config.categories) or _select_objects(ds, "test", config.categories)
+    entries = ds.objects("val", config.categories) or ds.objects("test", config.categories)
     step = max(1, len(entries) // max(config.val_objects, 1))
     return [ds.load_object(e) for e in entries[::step][: config.val_objects]]
 

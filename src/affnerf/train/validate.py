@@ -56,8 +56,8 @@ def validate(
     try:
         for obj in objects:
             inputs = list(range(input_views))
-            images, intrinsics, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
-            encoding = model.encode_views(images.to(device), intrinsics.to(device), poses.to(device))
+            crops, intrinsics, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
+            encoding = model.encode_views(crops.to(device), intrinsics.to(device), poses.to(device))
             intr = obj.record.intrinsics.scaled(scale)
             size = (intr.width, intr.height)
             targets = np.linspace(input_views, len(obj) - 1, views_per_object).round().astype(int)

@@ -19,11 +19,13 @@ class ConditionedNeRFMethod:
     Args:
         loaded: the model.
         chunk: rays per forward pass.
+        fast: render with the object's occupancy grid (empty-space skipping).
     """
 
-    def __init__(self, loaded: LoadedModel, chunk: int = 1024) -> None:
+    def __init__(self, loaded: LoadedModel, chunk: int = 1024, fast: bool = True) -> None:
         self.loaded = loaded
         self.chunk = chunk
+        self.fast = fast
         self.name = loaded.model.config.kind
 
     @torch.no_grad()
@@ -36,8 +38,10 @@ class ConditionedNeRFMethod:
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         encoding = self.encode(obj, inputs)
+        model = self.loaded.model
+        grid = model.occupancy(encoding) if self.fast else None
         views = [
-            render_view(self.loaded.model, encoding, targets.intrinsics, pose, targets.background, self.chunk)
+            render_view(model, encoding, targets.intrinsics, pose, targets.background, self.chunk, grid)
             for pose in targets.poses
         ]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))

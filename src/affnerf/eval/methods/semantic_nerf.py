@@ -70,8 +70,10 @@ class ObjectNeRF(ConditionedNeRF):
 class SemanticNeRFMethod:
     """Fits an :class:`ObjectNeRF` on each object's input views (at the scored resolution)."""
 
-    def __init__(self, num_classes: int, config: SemanticNeRFConfig = SemanticNeRFConfig(), chunk: int = 1024) -> None:
-        self.num_classes, self.config, self.chunk = num_classes, config, chunk
+    def __init__(
+        self, num_classes: int, config: SemanticNeRFConfig = SemanticNeRFConfig(), chunk: int = 1024, fast: bool = True
+    ) -> None:
+        self.num_classes, self.config, self.chunk, self.fast = num_classes, config, chunk, fast
         self.name = "semantic-nerf"
 
     def fit(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> ObjectNeRF:
@@ -103,5 +105,7 @@ class SemanticNeRFMethod:
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         model = self.fit(obj, inputs, targets)
-        views = [render_view(model, None, targets.intrinsics, p, targets.background, self.chunk) for p in targets.poses]
+        with torch.no_grad():
+            grid = model.occupancy(None) if self.fast else None
+        views = [render_view(model, None, targets.intrinsics, p, targets.background, self.chunk, grid) for p in targets.poses]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))

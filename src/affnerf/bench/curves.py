@@ -1,0 +1,79 @@
+"""Quality against training time, compared fairly on a noisy machine.
+
+Each configuration's time per step is measured alone first (median of steps after a warm-up); a time budget is
+then turned into a number of steps, and training runs in chunks of steps (``stop_at`` + ``--resume``, the real
+CLI path). After each chunk the newest checkpoint is scored on held-out objects. Wall-clock noise during the
+long runs therefore changes nothing but how long the benchmark takes.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from affnerf.data.dataset import Dataset
+from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
+from affnerf.eval.protocol import ProtocolConfig, evaluate
+from affnerf.model.factory import build_model
+from affnerf.predict.loading import load_model
+from affnerf.train.cache import ObjectFrames
+from affnerf.train.config import TrainConfig, config_to_json
+from affnerf.train.loss import nerf_loss
+from affnerf.train.sampler import RaySampler
+from affnerf.train.trainer import train
+
+#: Held-out scoring during curves: one input view, four targets at a quarter of the dataset's resolution.
+CURVE_PROTOCOL = ProtocolConfig(input_views=1, target_views=4, scale=0.25, seed=0)
+
+
+def step_seconds(config: TrainConfig, frames: list[ObjectFrames], steps: int = 40, warmup: int = 10) -> float:
+    """Median seconds of a training step of ``config`` (forward, backward, optimiser), measured alone."""
+    torch.manual_seed(0)
+    model = build_model(config.model, 12)
+    optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
+    sampler = RaySampler(frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, 0,
+                         input_views=config.input_views)  # fmt: skip
+    generator = torch.Generator().manual_seed(0)
+    times = []
+    for i in range(warmup + steps):
+        start = time.perf_counter()
+        b = sampler.next_batch()
+        coarse, fine = model(b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background,
+                             True, generator)  # fmt: skip
+        loss = nerf_loss(coarse, fine, b.rgb, b.labels, config.affordance_weight).total
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        if i >= warmup:
+            times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def score_run(run: Path, data: Path, split: str = "val", protocol: ProtocolConfig = CURVE_PROTOCOL) -> dict[str, Any]:
+    """Mean metrics (GUIDE 5) of a run's newest checkpoint on a split."""
+    ds = Dataset.open(data)
+    objects = [ds.load_object(e) for e in ds.objects(split=split)]
+    method = ConditionedNeRFMethod(load_model(run))
+    return evaluate(method, objects, protocol, split, len(ds.affordance_classes)).to_json()["mean"]
+
+
+def measure_curve(config: TrainConfig, minutes: float, chunks: int, seconds_per_step: float) -> dict[str, Any]:
+    """Train ``config`` for ``minutes`` of its (alone-measured) step time in ``chunks``, scoring after each."""
+    steps = int(minutes * 60 / seconds_per_step)
+    config = replace(config, steps=steps, val_every=0, progress=False)
+    curve = []
+    for chunk in range(1, chunks + 1):
+        stop = round(steps * chunk / chunks)
+        summary = train(replace(config, resume=chunk > 1, stop_at=stop))
+        m = score_run(config.out, config.data)
+        curve.append({"train_seconds": round(stop * seconds_per_step, 1), "step": summary.step,
+                      "loss": summary.scalars.get("loss/total"), "val_mIoU": m["mIoU"], "val_MPA": m["MPA"],
+                      "val_PSNR": m["PSNR"]})  # fmt: skip
+        print(f"{config.out.name} chunk {chunk}/{chunks}: {curve[-1]}", flush=True)
+    return {"seconds_per_step": seconds_per_step, "steps": steps, "rays_per_second": config.rays_per_step / seconds_per_step,
+            "config": config_to_json(config), "curve": curve}  # fmt: skip
