@@ -37,7 +37,11 @@ def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dat
         assert f"| {label} |" in table
     assert "| mIoU | affnerf |" in table and "Average" in table
     figure = np.asarray(Image.open(out / "figure.png"))
-    assert figure.shape[0] > 20 and figure.shape[1] > 6 * 20  # input | ground truth | five methods
+    example = next((out / "examples" / "input").glob("*.png"))
+    h, w = np.asarray(Image.open(example)).shape[:2]
+    assert figure.shape[0] > 2 * h and figure.shape[1] >= 7 * w  # two objects; input | ground truth | five methods
+    for label in labels:
+        assert len(list((out / "examples" / label).glob("*.png"))) == 2
     constant = json.loads((out / "metrics_constant.json").read_text())
     assert constant["mean"]["PA_object"] == 0.0 and constant["mean"]["PSNR"] is None
 

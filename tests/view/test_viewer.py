@@ -85,7 +85,8 @@ def test_build_scene_from_prediction_folder(server, prediction: Path) -> None:
     forward = handles.frustum.wxyz  # OpenCV +z (forward) of the frustum points at the origin
     rot = viser.transforms.SO3(np.asarray(forward)).as_matrix()
     assert np.dot(rot[:, 2], -position / np.linalg.norm(position)) > 0.99
-    assert np.allclose(handles.centre, 0.0, atol=1e-3) and math.isclose(handles.radius, 0.08 * math.sqrt(3), rel_tol=0.05)
+    assert np.allclose(handles.centre, 0.0, atol=1e-3)
+    assert math.isclose(handles.radius, 0.08 * math.sqrt(3), rel_tol=0.05)
 
 
 def test_build_scene_from_mesh_file_and_grasps_folder(server, prediction: Path) -> None:
@@ -143,9 +144,23 @@ def test_mesh_without_faces_is_an_error(tmp_path: Path) -> None:
     assert str(path) in str(info.value)
 
 
-def palette_pixels(image: np.ndarray, label: int, tolerance: int = 60) -> np.ndarray:
-    """(H, W) bool: pixels within ``tolerance`` (L1) of a class's palette colour."""
-    return np.abs(image.astype(np.int32) - AFFORDANCE_PALETTE[label].astype(np.int32)).sum(-1) < tolerance
+def hue_saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(..., 3) uint8 colours -> hue in degrees [0, 360) and saturation (max - min) / max."""
+    c = rgb[..., :3].astype(np.float64) / 255.0
+    hi, lo = c.max(-1), c.min(-1)
+    span = np.maximum(hi - lo, 1e-9)
+    r, g, b = c[..., 0], c[..., 1], c[..., 2]
+    hue = np.where(hi == r, (g - b) / span % 6.0, np.where(hi == g, (b - r) / span + 2.0, (r - g) / span + 4.0))
+    return hue * 60.0, (hi - lo) / np.maximum(hi, 1e-9)
+
+
+def palette_pixels(image: np.ndarray, label: int, degrees: float = 12.0) -> np.ndarray:
+    """(H, W) bool: saturated pixels within ``degrees`` of hue of a class's palette colour (hue, unlike RGB
+    distance, survives the viewer's shading)."""
+    hue, sat = hue_saturation(image)
+    target, _ = hue_saturation(AFFORDANCE_PALETTE[label])
+    gap = np.abs(hue - target)
+    return (sat > 0.35) & (np.minimum(gap, 360.0 - gap) < degrees)
 
 
 def canvas_region(image: np.ndarray) -> np.ndarray:

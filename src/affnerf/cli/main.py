@@ -21,6 +21,7 @@ def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     from affnerf.cli.bench import bench
     from affnerf.cli.predict import predict
     from affnerf.cli.train import make_train_command
+    from affnerf.cli.view import view
 
     app = SubcommandApp()
     app.command(data.app, name="data", help="Generate, import, index, preview and summarise datasets.")
@@ -29,6 +30,7 @@ def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     app.command(evaluate.app, name="eval", help="Evaluate like the paper's Table 2 (and, with `eval grasp`, Table 3).")
     app.command(evaluate.metrics, name="metrics")
     app.command(grasp.app, name="grasp", help="Plan parallel-jaw grasps on a labelled mesh, or score given grasps.")
+    app.command(view, name="view")
     app.command(bench, name="bench")
     app.command(demo.demo, name="demo", help="Run the whole pipeline at a small scale on this machine.")
     return app

@@ -163,13 +163,15 @@ def screenshot(
         raise FileNotFoundError(f"no Chromium found (looked for {', '.join(CHROMIUM_NAMES)})")
     deadline = time.monotonic() + timeout
     with tempfile.TemporaryDirectory(prefix="affnerf-chromium-") as profile:
-        args = [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", f"--window-size={width},{height}", "about:blank"]
+        size = f"--window-size={width},{height}"
+        args = [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", size, "about:blank"]
         proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         try:
             port = _devtools_port(Path(profile), proc, deadline)
             page = DevTools(_page_ws_url(port, 10.0), timeout=max(10.0, deadline - time.monotonic()))
             try:
-                page.call("Emulation.setDeviceMetricsOverride", width=width, height=height, deviceScaleFactor=1, mobile=False)
+                metrics = {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}
+                page.call("Emulation.setDeviceMetricsOverride", **metrics)
                 page.call("Page.navigate", url=url)
                 while True:
                     time.sleep(settle)

@@ -159,14 +159,17 @@ def _visibility_setter(node: viser.SceneNodeHandle, toggle: viser.GuiCheckboxHan
 def _add_grasps(server: viser.ViserServer, grasps: list[GraspModel], handles: SceneHandles, top_k: int) -> None:
     """The gripper at every grasp (the best dark), a slider for how many are shown and a line about the best."""
     if not grasps:
+        if handles.content.sources.grasps is not None:
+            with server.gui.add_folder("Grasps"):
+                server.gui.add_markdown(f"{handles.content.sources.grasps.name} lists no grasps.")
         return
     shown = max(0, min(top_k, len(grasps)))
     for g in grasps:
         best = g.rank == 0
+        color, opacity = (BEST_GRASP_COLOR, None) if best else (OTHER_GRASP_COLOR, OTHER_GRASP_OPACITY)
         node = server.scene.add_mesh_simple(
-            f"/grasps/{g.rank:03d}", g.mesh.vertices, g.mesh.faces, color=BEST_GRASP_COLOR if best else OTHER_GRASP_COLOR,
-            opacity=None if best else OTHER_GRASP_OPACITY, visible=g.rank < shown,
-        )  # fmt: skip
+            f"/grasps/{g.rank:03d}", g.mesh.vertices, g.mesh.faces, color=color, opacity=opacity, visible=g.rank < shown
+        )
         handles.grippers.append(node)
     with server.gui.add_folder("Grasps"):
         server.gui.add_markdown(_best_grasp_text(grasps[0], len(grasps)))
@@ -190,14 +193,17 @@ def _best_grasp_text(best: GraspModel, count: int) -> str:
     return ", ".join(parts) + "."
 
 
-def _add_camera(server: viser.ViserServer, camera: InputCamera, image: np.ndarray | None, handles: SceneHandles) -> None:
+def _add_camera(
+    server: viser.ViserServer, camera: InputCamera, image: np.ndarray | None, handles: SceneHandles
+) -> None:
     """The input camera as a frustum (with the image in it) and the image in the GUI panel."""
     c2w_cv = camera.c2w @ GL_TO_CV
     wxyz = vtf.SO3.from_matrix(c2w_cv[:3, :3]).wxyz
-    scale = float(np.clip(0.25 * np.linalg.norm(camera.c2w[:3, 3] - handles.centre), 0.02, 0.5))
+    distance = float(np.linalg.norm(camera.c2w[:3, 3] - handles.centre))
+    scale = float(np.clip(0.6 * handles.radius, 0.01, 0.5 * distance))  # about the object's size
     handles.frustum = server.scene.add_camera_frustum(
-        "/input_camera", fov=camera.fov_y, aspect=camera.aspect, scale=scale, image=image,
-        wxyz=wxyz, position=c2w_cv[:3, 3], color=(40, 40, 40),
+        "/input_camera", fov=camera.fov_y, aspect=camera.aspect, scale=scale, image=image, wxyz=wxyz,
+        position=c2w_cv[:3, 3], color=(40, 40, 40), thickness=2.0, thickness_units="screen",
     )  # fmt: skip
     with server.gui.add_folder("Input"):
         if image is not None:
@@ -217,7 +223,7 @@ def initial_view(centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndar
         (True, [0.0, 0.0, 0.0])
     """
     direction = VIEW_DIRECTION / np.linalg.norm(VIEW_DIRECTION)
-    distance = 1.15 * radius / math.sin(VIEW_FOV / 2.0)
+    distance = 1.6 * radius / math.sin(VIEW_FOV / 2.0)
     centre = np.asarray(centre, np.float64)
     return centre + distance * direction, centre
 
@@ -231,7 +237,9 @@ def _set_initial_view(server: viser.ViserServer, handles: SceneHandles) -> None:
     server.initial_camera.near = max(1e-3, 0.01 * handles.radius)
 
 
-def serve(path: Path, host: str = "127.0.0.1", port: int = 8080, block: bool = True, top_k: int = 5) -> viser.ViserServer:
+def serve(
+    path: Path, host: str = "127.0.0.1", port: int = 8080, block: bool = True, top_k: int = 5
+) -> viser.ViserServer:
     """Serve the viewer of PATH on http://HOST:PORT.
 
     The content is loaded before the server starts, so bad input opens no port. Viser takes the next free port
