@@ -1,14 +1,19 @@
-"""Pictures of labelled meshes for reports: the mesh coloured by affordance, from a few sides."""
+"""Pictures for reports: a labelled mesh coloured by affordance from a few sides, and the demo's overview sheet."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from pathlib import Path
+
 import numpy as np
+from PIL import Image
 
 from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.data.render import Renderer
 from affnerf.meshio import LabelledMesh
 from affnerf.objects.asset import Material, SurfaceMesh
 from affnerf.predict.mesh import face_labels
+from affnerf.viz import stack_rows, text_strip
 from affnerf.vocab import AFFORDANCE_PALETTE
 
 
@@ -39,3 +44,29 @@ def mesh_preview(mesh: LabelledMesh, size: int = 240, yaws: tuple[float, ...] = 
         eye = centre + reach * np.array([np.cos(a) * 0.8, np.sin(a) * 0.8, 0.55])
         views.append(renderer.render(intr, look_at(eye, centre)).rgb)
     return np.concatenate(views, axis=1)
+
+
+def _fit(image: np.ndarray, height: int) -> np.ndarray:
+    """Resize (keeping the aspect ratio) to ``height`` rows."""
+    width = max(1, round(image.shape[1] * height / image.shape[0]))
+    return np.asarray(Image.fromarray(image).convert("RGB").resize((width, height), Image.LANCZOS))
+
+
+def overview_sheet(folders: Sequence[Path], height: int = 150) -> np.ndarray | None:
+    """(H, W, 3) uint8: one row per demo example folder, input | a novel view (RGB | affordance) | the labelled
+    mesh | the best grasps; folders without a mesh are left out (None when none has one)."""
+    rows = []
+    for folder in folders:
+        folder = Path(folder)
+        original = next(iter(sorted(folder.glob("original.*"))), None)
+        turntable = sorted((folder / "turntable").glob("*.png"))
+        if original is None or not turntable or not (folder / "mesh_preview.png").is_file():
+            continue
+        row = [_fit(np.asarray(Image.open(p)), height) for p in (original, turntable[len(turntable) // 6], folder / "mesh_preview.png")]
+        if (folder / "grasps" / "grasps.png").is_file():
+            row.append(_fit(np.asarray(Image.open(folder / "grasps" / "grasps.png")), height))
+        rows.append(np.concatenate([np.pad(im, ((0, 0), (0, 4), (0, 0)), constant_values=255) for im in row], axis=1))
+    if not rows:
+        return None
+    header = text_strip("input   |   novel view: colour | affordance   |   labelled mesh   |   grasps", rows[0].shape[1])
+    return stack_rows([header, *[np.pad(r, ((0, 4), (0, 0), (0, 0)), constant_values=255) for r in rows]])

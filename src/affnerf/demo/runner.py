@@ -13,7 +13,7 @@ from typing import Any
 from PIL import Image
 from tqdm import tqdm
 
-from affnerf.demo.pictures import mesh_preview
+from affnerf.demo.pictures import mesh_preview, overview_sheet
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
@@ -122,5 +122,8 @@ def run_examples(config: DemoConfig, run: Path, examples: Path, metrics: dict[st
         folder.mkdir(exist_ok=True)
         results.append(demo_example(predictor, image, folder, config))
     bar.close()
+    sheet = overview_sheet([out / image.stem for image in images])
+    if sheet is not None:
+        Image.fromarray(sheet).save(out / "overview.png")
     metrics = metrics if metrics is not None else model_metrics(run)
     return write_report(out / "report.html", results, str(run), metrics, time.perf_counter() - started)

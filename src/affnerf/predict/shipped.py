@@ -1,13 +1,27 @@
-"""The model shipped with affnerf (``MODEL_CARD.md`` says how it was trained)."""
+"""The model shipped with affnerf (``MODEL_CARD.md`` says how it was trained), and how a run becomes one.
+
+``python -m affnerf.predict.shipped RUN OUT.pt`` writes RUN's last checkpoint without its optimiser and random
+states (what prediction needs, about a third of the size); the shipped model was made this way.
+"""
 
 from __future__ import annotations
 
+import argparse
+import os
+import tempfile
 from importlib import resources
 from pathlib import Path
 
+import torch
+
 from affnerf.errors import AffnerfError
+from affnerf.predict.loading import resolve_checkpoint
+from affnerf.train.checkpoint import load_checkpoint
 
 SHIPPED_NAME = "affnerf-small.pt"
+
+#: Checkpoint entries that inference reads (:func:`affnerf.predict.loading.load_model`).
+INFERENCE_KEYS = ("format", "step", "model", "model_config", "num_classes", "affordance_classes", "background", "train_config")
 
 
 def shipped_model() -> Path:
@@ -20,3 +34,34 @@ def shipped_model() -> Path:
     if not path.is_file():
         raise AffnerfError(f"no --run given and no shipped model at {path}; train one with `affnerf train`")
     return path
+
+
+def export_for_inference(run: Path, out: Path) -> Path:
+    """Write the last checkpoint of ``run`` (a run folder or checkpoint file) with only the entries inference
+    needs, atomically; returns ``out``."""
+    data = load_checkpoint(resolve_checkpoint(Path(run)))
+    slim = {k: data[k] for k in INFERENCE_KEYS if k in data}
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            torch.save(slim, f)
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="Export a run's last checkpoint for inference (no optimiser state).")
+    parser.add_argument("run", type=Path, help="run folder or checkpoint file")
+    parser.add_argument("out", type=Path, help="output .pt file")
+    args = parser.parse_args()
+    path = export_for_inference(args.run, args.out)
+    print(f"{path}: {path.stat().st_size / 2**20:.1f} MB")
+
+
+if __name__ == "__main__":
+    main()
