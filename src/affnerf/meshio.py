@@ -7,8 +7,6 @@ returns the extra properties.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,6 +14,7 @@ import numpy as np
 import trimesh
 
 from affnerf.errors import input_error
+from affnerf.fileio import atomic_write
 
 
 @dataclass
@@ -53,14 +52,7 @@ def write_labelled_ply(path: Path, mesh: LabelledMesh) -> None:
     for name, values in mesh.face_props.items():
         tm.face_attributes[name] = np.asarray(values)
     data = tm.export(file_type="ply", encoding="binary")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda f: f.write(data))
 
 
 _GEOMETRY_FIELDS = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "vertex_indices", "s", "t"}

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,6 +16,7 @@ import numpy as np
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.errors import input_error
+from affnerf.fileio import atomic_write
 
 #: Format tag of ``dataset.json``.
 FORMAT = "affnerf-1"
@@ -49,17 +48,8 @@ def write_json_atomic(path: Path, data: Any) -> None:
 
     A crash or a failed write leaves the previous file untouched.
     """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(jsonable(data), f, indent=1)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    text = json.dumps(jsonable(data), indent=1).encode()
+    atomic_write(Path(path), lambda f: f.write(text))
 
 
 def read_json(path: Path) -> Any:

@@ -3,7 +3,6 @@ grasps, and a PNG rendering of them."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +12,7 @@ from PIL import Image
 
 from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.data.format import check_pose, write_json_atomic
+from affnerf.fileio import read_json_file
 from affnerf.data.render import Renderer
 from affnerf.errors import input_error
 from affnerf.grasp.gripper import ParallelJawGripper
@@ -47,12 +47,7 @@ def read_grasps(path: Path) -> list[tuple[np.ndarray, float]]:
         AffnerfError: naming the file, for a missing file, invalid JSON or a wrong schema.
     """
     path = Path(path)
-    if not path.is_file():
-        raise input_error(path, "file not found")
-    try:
-        data = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise input_error(path, f"not valid JSON ({exc})") from None
+    data = read_json_file(path)
     if not isinstance(data, dict) or not isinstance(data.get("grasps"), list):
         raise input_error(path, "expected {'grasps': [{'pose': 4x4, 'width': metres}, ...]}")
     out = []

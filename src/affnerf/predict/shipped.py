@@ -7,14 +7,13 @@ states (what prediction needs, about a third of the size); the shipped model was
 from __future__ import annotations
 
 import argparse
-import os
-import tempfile
 from importlib import resources
 from pathlib import Path
 
 import torch
 
 from affnerf.errors import AffnerfError
+from affnerf.fileio import atomic_write
 from affnerf.predict.loading import resolve_checkpoint
 from affnerf.train.checkpoint import load_checkpoint
 
@@ -43,14 +42,7 @@ def export_for_inference(run: Path, out: Path) -> Path:
     slim = {k: data[k] for k in INFERENCE_KEYS if k in data}
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(slim, f)
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(out, lambda f: torch.save(slim, f))
     return out
 
 

@@ -8,15 +8,14 @@ from its checkpoint alone.
 from __future__ import annotations
 
 import dataclasses
-import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import torch
 
 from affnerf.errors import input_error
+from affnerf.fileio import atomic_write
 from affnerf.model.config import ModelConfig
 
 FORMAT = "affnerf-checkpoint-1"
@@ -45,16 +44,7 @@ def save_checkpoint(folder: Path, step: int, payload: dict[str, Any], keep: int)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     target = checkpoint_path(folder, step)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save({"format": FORMAT, "step": step, **payload}, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(target, lambda f: torch.save({"format": FORMAT, "step": step, **payload}, f))
     for old in list_checkpoints(folder)[:-keep] if keep > 0 else []:
         old.unlink(missing_ok=True)
     return target

@@ -7,12 +7,12 @@ alone: ``affnerf train --data DIR --out RUN2 --config-file RUN/config.json``.
 from __future__ import annotations
 
 import dataclasses
-import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
 from affnerf.errors import AffnerfError, input_error
+from affnerf.fileio import read_json_file
 from affnerf.model.config import ModelConfig
 
 
@@ -168,10 +168,4 @@ def config_from_json(data: dict[str, Any], path: Path) -> TrainConfig:
 def read_config(path: Path) -> TrainConfig:
     """Read a run's ``config.json``."""
     path = Path(path)
-    if not path.is_file():
-        raise input_error(path, "file not found")
-    try:
-        data = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise input_error(path, f"not valid JSON ({exc})") from None
-    return config_from_json(data, path)
+    return config_from_json(read_json_file(path), path)

@@ -1,0 +1,54 @@
+"""Files written atomically and JSON files read with one-line errors.
+
+A file written by :func:`atomic_write` appears under its final name only once completely written and synced; a
+crash or a failed write (full disk, read-only folder) leaves the previous file, if any, untouched.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO, Any
+
+from affnerf.errors import input_error
+
+
+def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
+    """Call ``write`` on a temporary binary file beside ``path``, sync it, then rename it to ``path``.
+
+    Example:
+        >>> import tempfile
+        >>> target = Path(tempfile.mkdtemp()) / "note.txt"
+        >>> atomic_write(target, lambda f: f.write(b"hello")).read_text()
+        'hello'
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_json_file(path: Path) -> Any:
+    """The parsed content of a JSON file.
+
+    Raises:
+        AffnerfError: naming the file, when it is missing or not valid JSON.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise input_error(path, "file not found")
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise input_error(path, f"not valid JSON ({exc})") from None
