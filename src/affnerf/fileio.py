@@ -24,6 +24,8 @@ def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
         >>> target = Path(tempfile.mkdtemp()) / "note.txt"
         >>> atomic_write(target, lambda f: f.write(b"hello")).read_text()
         'hello'
+        >>> oct(target.stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+        True
     """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -32,11 +34,19 @@ def atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the permissions open() would
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _umask() -> int:
+    """The process's file-creation mask."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def read_json_file(path: Path) -> Any:

@@ -52,7 +52,7 @@ class DemoConfig:
     examples: Path | None = None
     train: bool = False
     train_minutes: float = 4.0
-    views: int = 12
+    views: int = 8
     grasps: int = 16
     device: str = "auto"
 
