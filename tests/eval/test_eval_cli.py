@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from PIL import Image
 
 from affnerf.cli.main import main
+from affnerf.data.dataset import Dataset
+from affnerf.eval.runner import EvalConfig, build_method
+from affnerf.predict import loading
 from affnerf.eval.protocol import METRIC_KEYS
 
 
@@ -85,3 +89,19 @@ def test_metrics_reports_a_missing_prediction(tmp_path, capsys):
     pred.mkdir()
     assert main(["metrics", "--pred", str(pred), "--gt", str(gt)]) == 2
     assert "a.png: prediction missing" in capsys.readouterr().err
+
+
+def test_retrieval_bank_holds_only_the_categories_the_run_trained_on(trained_runs, train_dataset, monkeypatch):
+    ds = Dataset.open(train_dataset)
+    config = EvalConfig(run=trained_runs["affnerf"], data=train_dataset, out=train_dataset, device="cpu")
+    every = build_method("retrieval", config, ds)
+    assert {e.category for e in every.entries} == {"bottle", "screwdriver"}
+    original = loading.load_model
+
+    def trained_on_bottles(path, device="cpu"):
+        loaded = original(path, device)
+        return replace(loaded, train_config={**loaded.train_config, "categories": "bottle"})
+
+    monkeypatch.setattr(loading, "load_model", trained_on_bottles)
+    bottles = build_method("retrieval", config, ds)
+    assert {e.category for e in bottles.entries} == {"bottle"}
