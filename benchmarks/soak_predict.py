@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import gc
 import json
-import platform
 import resource
 import tempfile
 import time
@@ -21,6 +20,8 @@ from pathlib import Path
 
 import torch
 
+from affnerf.bench.environment import describe_machine
+from affnerf.bench.timing import peak_memory
 from affnerf.demo.runner import repository_examples
 from affnerf.predict.outputs import PredictConfig, write_prediction
 from affnerf.predict.predictor import Predictor
@@ -48,15 +49,15 @@ def soak(run: Path, images: list[Path], count: int, views: int) -> dict:
     last = records[-1]["rss_mb"]
     return {
         "benchmark": "soak_predict",
-        "machine": f"{platform.processor() or platform.machine()}, {torch.get_num_threads()} threads, CPU",
-        "torch": torch.__version__,
+        "machine": describe_machine(),
+        "threads": torch.get_num_threads(),
         "run": str(run),
         "count": count,
         "views_per_prediction": views,
         "rss_mb_after_first_round": first_round,
         "rss_mb_after_last": last,
         "growth_mb_after_first_round": last - first_round,
-        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        **peak_memory("cpu"),
         "predictions": records,
     }
 

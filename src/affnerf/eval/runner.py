@@ -119,8 +119,7 @@ def build_method(name: str, config: EvalConfig, ds: Dataset) -> Method:
     if loaded.classes != ds.affordance_classes:
         raise AffnerfError(f"{loaded.path}: trained with other affordance classes than {ds.root / 'dataset.json'}")
     if name == "retrieval":  # the bank holds only what the run trained on: no peeking at a held-out category
-        trained = [c for c in str(loaded.train_config.get("categories", "")).split(",") if c]
-        return RetrievalMethod(loaded, ds, trained or None)
+        return RetrievalMethod(loaded, ds, loaded.train_config.get("categories") or None)
     return ConditionedNeRFMethod(loaded, config.chunk, config.fast)
 
 

@@ -24,14 +24,18 @@ class RetrievalMethod:
     Args:
         loaded: a trained AFF-NeRF (its shape encoder embeds the images).
         dataset: the dataset holding the training objects and their ``mesh.ply``.
-        categories: restrict the bank to these categories (None = every training object).
+        categories: restrict the bank to these categories (a list or comma-separated text; None = every training object).
         views_per_object: views of each training object whose codes are averaged into its bank entry.
     """
 
     name = "retrieval"
 
     def __init__(
-        self, loaded: LoadedModel, dataset: Dataset, categories: list[str] | None = None, views_per_object: int = 4
+        self,
+        loaded: LoadedModel,
+        dataset: Dataset,
+        categories: list[str] | str | None = None,
+        views_per_object: int = 4,
     ) -> None:
         if loaded.model.config.kind != "affnerf":
             raise ValueError("retrieval embeds images with an AFF-NeRF's shape encoder")
