@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from affnerf.data.format import check_pose, parse_index, parse_transforms
 from affnerf.errors import AffnerfError
-from affnerf.eval.metrics import confusion_matrix, mean_iou, mean_pixel_accuracy, pixel_accuracy, segmentation_metrics
+from affnerf.metrics.segmentation import confusion_matrix, mean_iou, mean_pixel_accuracy, pixel_accuracy, segmentation_metrics
 
 JSONISH = st.recursive(
     st.none() | st.booleans() | st.integers(-5, 300) | st.floats(allow_nan=True) | st.text(max_size=6),

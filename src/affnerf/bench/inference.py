@@ -16,7 +16,7 @@ import torch
 
 from affnerf.bench.timing import timed
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
-from affnerf.eval.metrics import psnr
+from affnerf.metrics.image import psnr
 from affnerf.predict.loading import LoadedModel
 from affnerf.predict.predictor import EncodedObject, Predictor, turntable_poses
 

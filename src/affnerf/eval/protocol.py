@@ -3,7 +3,7 @@
 For each object: input views chosen by a fixed seed, K other views as targets. A method sees the input views
 (images, poses, and for the per-object baselines their labels) and predicts RGB and affordance labels at the
 target cameras. Per category one confusion matrix accumulates all its target views; metrics follow
-:mod:`affnerf.eval.metrics`, PSNR is averaged over target views.
+:mod:`affnerf.metrics.segmentation`, PSNR is averaged over target views.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ from PIL import Image
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.data.dataset import ObjectData
-from affnerf.eval.metrics import confusion_matrix, psnr, segmentation_metrics
+from affnerf.metrics.image import psnr
+from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
 
 METRIC_KEYS = ("mIoU", "PA", "MPA", "mIoU_object", "PA_object", "MPA_object", "PSNR")
 

@@ -9,7 +9,8 @@ import torch
 from PIL import Image
 
 from affnerf.data.dataset import ObjectData
-from affnerf.eval.metrics import confusion_matrix, mean_iou, pixel_accuracy, psnr
+from affnerf.metrics.image import psnr
+from affnerf.metrics.segmentation import confusion_matrix, mean_iou, pixel_accuracy
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from affnerf.eval.metrics import (
+from affnerf.metrics.image import psnr
+from affnerf.metrics.segmentation import (
     confusion_matrix,
     iou_per_class,
     mean_iou,
     mean_pixel_accuracy,
     object_only,
     pixel_accuracy,
-    psnr,
     segmentation_metrics,
 )
 
