@@ -55,6 +55,24 @@ def write_labelled_ply(path: Path, mesh: LabelledMesh) -> None:
     atomic_write(path, lambda f: f.write(data))
 
 
+def majority_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
+    """(F,) label of each face from (V,) vertex labels: the one most of its vertices carry (the first vertex's
+    when all three differ).
+
+    Example:
+        >>> majority_face_labels(np.array([[0, 1, 2]]), np.array([3, 5, 5])).tolist()
+        [5]
+    """
+    a, b, c = (vertex_labels[faces[:, k]] for k in range(3))
+    return np.where((b == c) & (a != b), b, a)
+
+
+def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(F,) area of each triangle of (V, 3) vertices and (F, 3) faces, in squared units of the vertices."""
+    tri = np.asarray(vertices)[np.asarray(faces)]
+    return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+
+
 _GEOMETRY_FIELDS = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "vertex_indices", "s", "t"}
 
 

@@ -11,7 +11,7 @@ import trimesh
 
 from affnerf.cli.main import main
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.model import GraspObject
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal
 from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
 from affnerf.meshio import LabelledMesh, write_labelled_ply

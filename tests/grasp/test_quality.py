@@ -10,7 +10,7 @@ import trimesh
 from scipy.optimize import minimize
 
 from affnerf.grasp.gripper import grasp_pose
-from affnerf.grasp.model import GraspObject
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.quality import contact_wrenches, ferrari_canny, friction_cone, hull_margin
 from affnerf.grasp.scoring import score_grasps
 

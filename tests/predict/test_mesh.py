@@ -6,7 +6,8 @@ import numpy as np
 import torch
 import trimesh
 
-from affnerf.predict.mesh import class_areas, extract_labelled_mesh, face_labels
+from affnerf.meshio import majority_face_labels
+from affnerf.predict.mesh import class_areas, extract_labelled_mesh
 
 
 def _sphere(radius: float, sharpness: float = 0.01):
@@ -38,4 +39,4 @@ def test_empty_field_gives_an_empty_mesh():
 def test_face_label_is_the_majority_of_its_vertices():
     faces = np.array([[0, 1, 2], [0, 1, 3], [1, 2, 3]])
     labels = np.array([4, 4, 5, 5])
-    assert face_labels(faces, labels).tolist() == [4, 4, 5]
+    assert majority_face_labels(faces, labels).tolist() == [4, 4, 5]

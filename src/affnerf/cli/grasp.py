@@ -42,7 +42,7 @@ def plan(
 
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import export_scene, render_grasps, save_png, summary, write_grasps
-    from affnerf.grasp.model import load_grasp_object
+    from affnerf.grasp.target import load_grasp_object
     from affnerf.grasp.planner import PlanConfig, plan_grasps
 
     obj = load_grasp_object(mesh, need_affordance=affordance != "none")
@@ -72,7 +72,7 @@ def score(mesh: Path, grasps: Path, out: Path | None = None) -> None:
 
     from affnerf.data.format import write_json_atomic
     from affnerf.grasp.io import read_grasps
-    from affnerf.grasp.model import load_grasp_object
+    from affnerf.grasp.target import load_grasp_object
     from affnerf.grasp.scoring import score_grasps
 
     obj = load_grasp_object(mesh)

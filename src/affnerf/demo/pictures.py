@@ -10,9 +10,8 @@ from PIL import Image
 
 from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.data.render import Renderer
-from affnerf.meshio import LabelledMesh
+from affnerf.meshio import LabelledMesh, majority_face_labels
 from affnerf.objects.asset import Material, SurfaceMesh
-from affnerf.predict.mesh import face_labels
 from affnerf.viz import stack_rows, text_strip
 from affnerf.vocab import AFFORDANCE_PALETTE
 
@@ -23,7 +22,7 @@ def mesh_preview(mesh: LabelledMesh, size: int = 240, yaws: tuple[float, ...] = 
         return np.full((size, size * len(yaws), 3), 255, np.uint8)
     labels = mesh.face_props.get("affordance")
     if labels is None:
-        labels = face_labels(mesh.faces, np.asarray(mesh.vertex_props.get("affordance", np.zeros(len(mesh.vertices), int))))
+        labels = majority_face_labels(mesh.faces, np.asarray(mesh.vertex_props.get("affordance", np.zeros(len(mesh.vertices), int))))
     labels = np.asarray(labels, np.int64)
     classes = np.unique(labels)
     materials = [Material(tuple(AFFORDANCE_PALETTE[c % len(AFFORDANCE_PALETTE)] / 255.0 * 0.8 + 0.15)) for c in classes]

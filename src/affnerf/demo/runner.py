@@ -17,7 +17,7 @@ from affnerf.demo.pictures import mesh_preview, overview_sheet
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
-from affnerf.grasp.model import GraspObject
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, plan_grasps
 from affnerf.meshio import read_labelled_ply
 from affnerf.predict.outputs import PredictConfig, write_prediction

@@ -21,7 +21,7 @@ from affnerf.data.format import write_json_atomic
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.model import GraspObject
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
 from affnerf.meshio import read_labelled_ply

@@ -16,7 +16,7 @@ from affnerf.fileio import read_json_file
 from affnerf.data.render import Renderer
 from affnerf.errors import input_error
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.model import GraspObject
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import Grasp
 from affnerf.objects.asset import Material, SurfaceMesh
 from affnerf.vocab import colorize_labels

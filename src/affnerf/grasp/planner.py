@@ -15,8 +15,9 @@ import numpy as np
 
 from affnerf.errors import AffnerfError
 from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
-from affnerf.grasp.model import Contacts, GraspObject, close_jaws
-from affnerf.grasp.quality import MU, ferrari_canny
+from affnerf.grasp.contacts import close_jaws, score_contacts
+from affnerf.grasp.target import GraspObject
+from affnerf.grasp.quality import MU
 from affnerf.grasp.refine import RefineConfig, refine_grasps
 from affnerf.vocab import affordance_id
 
@@ -163,16 +164,6 @@ def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, ang
         if not close:
             kept.append(int(i))
     return kept
-
-
-def score_contacts(obj: GraspObject, contacts: Contacts, poses: np.ndarray, mu: float = MU) -> np.ndarray:
-    """(G,) Ferrari-Canny epsilon of closed-jaw contacts (0 where the jaws find no valid pair); the friction
-    cones are linearised relative to each grasp's approach axis."""
-    out = np.zeros(len(contacts.valid))
-    for g in np.flatnonzero(contacts.valid):
-        inward = -obj.face_normals[contacts.faces[g]]
-        out[g] = ferrari_canny(contacts.points[g], inward, obj.centroid, obj.radius, mu, reference=poses[g, :3, 2])
-    return out
 
 
 def plan_grasps(obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()) -> list[Grasp]:

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.model import GraspObject, close_jaws
-from affnerf.grasp.planner import score_contacts
+from affnerf.grasp.contacts import close_jaws, score_contacts
+from affnerf.grasp.target import GraspObject
 from affnerf.grasp.quality import MU
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 from skimage import measure
 
-from affnerf.meshio import LabelledMesh
+from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels
 from affnerf.objects.asset import CANONICAL_HALF_EXTENT
 from affnerf.rendering.grid import OccupancyGrid
 from affnerf.vocab import colorize_labels
@@ -90,12 +90,6 @@ def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = 65536) -> np.n
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
-    """(F,) label of each face: the label most of its vertices carry (the first vertex's when all differ)."""
-    a, b, c = (vertex_labels[faces[:, k]] for k in range(3))
-    return np.where((b == c) & (a != b), b, a)
-
-
 def extract_labelled_mesh(
     density: PointFn,
     labels: PointFn,
@@ -119,14 +113,13 @@ def extract_labelled_mesh(
         vertices=vertices,
         faces=faces,
         vertex_props={"affordance": vertex_labels.astype(np.uint8)},
-        face_props={"affordance": face_labels(faces, vertex_labels).astype(np.uint8)},
+        face_props={"affordance": majority_face_labels(faces, vertex_labels).astype(np.uint8)},
         vertex_colors=colorize_labels(vertex_labels),
     )
 
 
 def class_areas(mesh: LabelledMesh) -> dict[int, float]:
     """Surface area (m^2) per face affordance class."""
-    tri = mesh.vertices[mesh.faces]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    area = face_areas(mesh.vertices, mesh.faces)
     labels = mesh.face_props["affordance"]
     return {int(c): float(area[labels == c].sum()) for c in np.unique(labels)}

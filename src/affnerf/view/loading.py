@@ -11,6 +11,7 @@ import numpy as np
 import trimesh
 
 from affnerf.errors import input_error
+from affnerf.meshio import majority_face_labels, read_labelled_ply
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.vocab import AFFORDANCE_CLASSES, colorize_labels
 
@@ -86,8 +87,6 @@ def load_mesh(path: Path) -> tuple[trimesh.Trimesh, np.ndarray | None]:
     """
     path = Path(path)
     if path.suffix.lower() == ".ply":
-        from affnerf.meshio import read_labelled_ply
-
         labelled = read_labelled_ply(path)
         mesh = labelled.to_trimesh()
         if "affordance" in labelled.face_props:
@@ -104,17 +103,6 @@ def load_mesh(path: Path) -> tuple[trimesh.Trimesh, np.ndarray | None]:
     if not np.isfinite(mesh.vertices).all():
         raise input_error(path, "mesh has non-finite vertices")
     return mesh, None
-
-
-def majority_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
-    """(F,) label of each face: the one most of its vertices carry (the first vertex's when all differ).
-
-    Example:
-        >>> majority_face_labels(np.array([[0, 1, 2]]), np.array([3, 5, 5])).tolist()
-        [5]
-    """
-    a, b, c = (vertex_labels[faces[:, k]] for k in range(3))
-    return np.where((b == c) & (a != b), b, a)
 
 
 def submesh(mesh: trimesh.Trimesh, face_mask: np.ndarray) -> trimesh.Trimesh:
