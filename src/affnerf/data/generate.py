@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,12 @@ def make_job_object(config: GenerateConfig, job: ObjectJob, on_frame: Any = None
     return write_object(config.out, job.entry, asset, poses, intr, config.background, {"seed": config.seed}, on_frame)
 
 
+def make_job_entry(config: GenerateConfig, job: ObjectJob, on_frame: Any = None) -> IndexEntry:
+    """Make one object (as :func:`make_job_object`) and return its index entry: the work of a pool worker."""
+    make_job_object(config, job, on_frame)
+    return job.entry
+
+
 def _check_settings(config: GenerateConfig) -> dict[str, Any]:
     """Refuse to resume into a folder generated with other settings (the objects would not match).
 
@@ -212,7 +219,7 @@ def generate_dataset(config: GenerateConfig, progress: bool = True) -> GenerateR
                 report.made.append(job.entry.id)
                 bars.object()
         else:
-            for entry in run_jobs(config, todo, config.workers, bars.frames.update):
+            for entry in run_jobs(partial(make_job_entry, config), todo, config.workers, bars.frames.update):
                 update_index(root, [entry])
                 report.made.append(entry.id)
                 bars.object()

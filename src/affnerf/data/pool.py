@@ -18,18 +18,19 @@ from typing import Any
 _POLL_SECONDS = 0.2
 
 
-def _worker_loop(tasks: Any, results: Any, progress: Any) -> None:
-    """Run jobs from ``tasks`` until a None arrives; report ("ok", entry) or ("error", exception)."""
-    from affnerf.data.generate import make_job_object
+#: What a worker runs for each job: ``work(job, on_frame)`` returns the job's result (picklable); ``on_frame()`` is
+#: called once per finished frame. It must be picklable itself (a module-level function or a partial of one).
+Work = Callable[[Any, Callable[[], None]], Any]
 
+
+def _worker_loop(work: Work, tasks: Any, results: Any, progress: Any) -> None:
+    """Run jobs from ``tasks`` until a None arrives; report ("ok", result) or ("error", exception)."""
     while True:
-        item = tasks.get()
-        if item is None:
+        job = tasks.get()
+        if job is None:
             return
-        config, job = item
         try:
-            make_job_object(config, job, on_frame=lambda: progress.put(1))
-            results.put(("ok", job.entry))
+            results.put(("ok", work(job, lambda: progress.put(1))))
         except BaseException as exc:  # handed to the parent, which raises it
             results.put(("error", exc))
             return
@@ -52,14 +53,12 @@ def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
     return procs
 
 
-def run_jobs(
-    config: Any, jobs: Sequence[Any], workers: int, on_frames: Callable[[int], None]
-) -> Iterator[Any]:
-    """Make ``jobs`` in ``workers`` pinned processes, yielding each finished job's index entry.
+def run_jobs(work: Work, jobs: Sequence[Any], workers: int, on_frames: Callable[[int], None]) -> Iterator[Any]:
+    """Run ``work`` on each of ``jobs`` in ``workers`` pinned processes, yielding each job's result as it finishes.
 
     Args:
-        config: the GenerateConfig.
-        jobs: the ObjectJobs to make.
+        work: what to do with one job (see :data:`Work`).
+        jobs: picklable job descriptions.
         workers: number of processes.
         on_frames: called in this process with the number of frames finished since the last call.
 
@@ -69,10 +68,10 @@ def run_jobs(
     ctx = mp.get_context("spawn")
     tasks, results, progress = ctx.Queue(), ctx.Queue(), ctx.Queue()
     for job in jobs:
-        tasks.put((config, job))
+        tasks.put(job)
     for _ in range(workers):
         tasks.put(None)
-    procs = _start_pinned(ctx, workers, (tasks, results, progress))
+    procs = _start_pinned(ctx, workers, (work, tasks, results, progress))
     try:
         remaining = len(jobs)
         while remaining:
