@@ -5,6 +5,8 @@ A learned method that does not beat this has learned nothing beyond recognising 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import torch
 
@@ -12,10 +14,43 @@ from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.format import IndexEntry
 from affnerf.data.render import Renderer
 from affnerf.data.writer import surface_from_record
+from affnerf.errors import input_error
 from affnerf.eval.protocol import Prediction, TargetSet
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import LoadedModel
+
+
+def category_names(categories: list[str] | str | None) -> list[str] | None:
+    """Category names from a list or comma-separated text; ``None`` (every category) for none.
+
+    Example:
+        >>> category_names("pen, bottle"), category_names(""), category_names(["cabinet"])
+        (['pen', 'bottle'], None, ['cabinet'])
+    """
+    if isinstance(categories, str):
+        categories = [c.strip() for c in categories.split(",") if c.strip()]
+    return list(categories) if categories else None
+
+
+def bank_entries(dataset: Dataset, categories: list[str] | str | None) -> list[IndexEntry]:
+    """The objects of the retrieval bank: the dataset's train split, restricted to ``categories`` when given.
+
+    Raises:
+        AffnerfError: naming ``dataset.json``, when there are none (a dataset of test objects only, or one without
+            the run's training categories).
+    """
+    names = category_names(categories)
+    entries = [e for e in dataset.objects(split="train") if names is None or e.category in names]
+    if not entries:
+        which = "every category" if names is None else ", ".join(names)
+        raise input_error(
+            Path(dataset.root) / "dataset.json",
+            f"the retrieval bank is empty: it holds the train-split objects of the run's training categories "
+            f"({which}) and this dataset has none; evaluate retrieval on a dataset with such objects, e.g. the "
+            f"one the run was trained on",
+        )
+    return entries
 
 
 class RetrievalMethod:
@@ -41,7 +76,7 @@ class RetrievalMethod:
             raise ValueError("retrieval embeds images with an AFF-NeRF's shape encoder")
         self.loaded, self.dataset = loaded, dataset
         self.views_per_object = views_per_object
-        self.entries: list[IndexEntry] = dataset.objects(split="train", categories=categories)
+        self.entries: list[IndexEntry] = bank_entries(dataset, categories)
         self.bank = np.stack([self._embed(dataset.load_object(e), None) for e in self.entries])
         self._renderers: dict[str, Renderer] = {}
 
