@@ -17,6 +17,7 @@ import torch
 from affnerf.bench.timing import timed
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
 from affnerf.metrics.image import psnr
+from affnerf.model.config import POINTS_PER_CHUNK, RAYS_PER_CHUNK
 from affnerf.predict.loading import LoadedModel
 from affnerf.predict.predictor import EncodedObject, Predictor, turntable_poses
 
@@ -44,10 +45,10 @@ def measure_inference(
         views: views of the multi-view measurement.
         size: (width, height) of rendered views.
         resolution: marching-cubes grid resolution.
-        chunk: rays per forward pass (default: 1024 on CPU, 65536 on GPU).
+        chunk: rays per forward pass (default: RAYS_PER_CHUNK on CPU, POINTS_PER_CHUNK on GPU).
     """
     device = loaded.device
-    chunk = chunk or (65536 if device.type == "cuda" else 1024)
+    chunk = chunk or (POINTS_PER_CHUNK if device.type == "cuda" else RAYS_PER_CHUNK)
     fast = Predictor(loaded, chunk, fast=True)
     cube = Predictor(loaded, chunk, fast=False)
     reference = _reference(loaded, chunk)

@@ -27,7 +27,7 @@ from affnerf.grasp.scoring import score_grasps
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import LoadedModel, load_model
-from affnerf.predict.mesh import DEFAULT_LEVEL, extract_labelled_mesh
+from affnerf.predict.mesh import model_mesh
 from affnerf.predict.predictor import pick_device
 
 CONDITIONS = ("original", "affordance")
@@ -48,7 +48,7 @@ class GraspEvalConfig:
         lift: run the physics lift test.
         lift_grasps: best grasps per object and condition lifted in physics.
         resolution: marching-cubes resolution of the predicted models.
-        level: density level of the predicted surfaces.
+        level: density level of the predicted surfaces (None: the model config's ``surface_density``).
         max_objects: at most this many objects per category (0 = all).
         refine_steps: local-search steps of the planner.
         seed: seed of the input-view choice and the planner.
@@ -64,20 +64,21 @@ class GraspEvalConfig:
     lift: bool = True
     lift_grasps: int = 5
     resolution: int = 128
-    level: float = DEFAULT_LEVEL
+    level: float | None = None
     max_objects: int = 0
     refine_steps: int = 20
     seed: int = 0
     device: str = "auto"
 
 
-def predicted_object(loaded: LoadedModel, obj: ObjectData, view: int, resolution: int, level: float) -> GraspObject:
+def predicted_object(
+    loaded: LoadedModel, obj: ObjectData, view: int, resolution: int, level: float | None = None
+) -> GraspObject:
     """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
     encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
-    density, labels = model.point_fields(encoding)
-    mesh = extract_labelled_mesh(density, labels, resolution, level, occupancy=model.occupancy(encoding))
+    mesh = model_mesh(model, encoding, resolution, level, model.occupancy(encoding))
     return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
 
 

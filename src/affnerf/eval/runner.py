@@ -19,6 +19,7 @@ from affnerf.data.format import write_json_atomic
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import Method, ProtocolConfig, evaluate
 from affnerf.eval.report import figure_grid, read_method_results, save_examples, table2_markdown
+from affnerf.model.config import RAYS_PER_CHUNK
 
 METHODS = ("affnerf", "pixelnerf", "semantic-nerf", "retrieval", "constant")
 
@@ -62,7 +63,7 @@ class EvalConfig:
     max_objects: int = 0
     semantic_steps: int = 400
     device: str = "auto"
-    chunk: int = 1024
+    chunk: int = RAYS_PER_CHUNK
     figure_objects: int = 8
     fast: bool = True
 

@@ -9,7 +9,7 @@ from typing import Any
 import torch
 from torch import nn
 
-from affnerf.model.config import ModelConfig
+from affnerf.model.config import POINTS_PER_CHUNK, ModelConfig
 from affnerf.model.field import ConditionalField
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.rendering.grid import OccupancyGrid, build_grid
@@ -75,10 +75,13 @@ class ConditionedNeRF(nn.Module, ABC):
         obj = torch.zeros(len(origins), dtype=torch.long, device=origins.device)
         return self.renderer.render_rays_in_grid(self.condition(encoding, obj), grid, origins, dirs, background, num)
 
-    def occupancy(self, encoding: Any, resolution: int = 64, threshold: float = 1.0) -> OccupancyGrid:
-        """The occupancy grid of one encoded object's density (evaluated once; see :mod:`affnerf.rendering.grid`)."""
+    def occupancy(self, encoding: Any, resolution: int = 64, threshold: float | None = None) -> OccupancyGrid:
+        """The occupancy grid of one encoded object's density over the scene cube (evaluated once; see
+        :mod:`affnerf.rendering.grid`); ``threshold`` defaults to the config's ``occupancy_density``."""
         density, _ = self.point_fields(encoding)
-        return build_grid(density, resolution, threshold, device=next(self.parameters()).device)
+        level = self.config.occupancy_density if threshold is None else threshold
+        device = next(self.parameters()).device
+        return build_grid(density, self.config.scene_half_extent, resolution, level, chunk=POINTS_PER_CHUNK, device=device)
 
     def forward(
         self,

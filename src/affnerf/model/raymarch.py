@@ -15,7 +15,6 @@ from torch import nn
 
 from affnerf.model.config import ModelConfig
 from affnerf.model.field import ConditionalField
-from affnerf.objects.asset import CANONICAL_HALF_EXTENT
 from affnerf.rendering.grid import OccupancyGrid, occupied_samples
 from affnerf.rendering.rays import intersect_aabb
 from affnerf.rendering.samplers import merge_samples, pdf_samples, stratified_samples
@@ -113,7 +112,7 @@ class FieldRenderer(nn.Module):
         """(R,) start, end, and whether each ray is sampled at all (the cube clip, or the full range)."""
         c = self.config
         if c.clip_to_cube:
-            return intersect_aabb(origins, dirs, CANONICAL_HALF_EXTENT, c.near, c.far)
+            return intersect_aabb(origins, dirs, c.scene_half_extent, c.near, c.far)
         n = origins.shape[0]
         near = torch.full((n,), c.near, dtype=origins.dtype, device=origins.device)
         return near, torch.full_like(near, c.far), torch.ones(n, dtype=torch.bool, device=origins.device)

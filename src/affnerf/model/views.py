@@ -11,6 +11,7 @@ import torch
 from affnerf.data.cameras import Intrinsics
 from affnerf.model.affnerf import Codes
 from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.rendering.grid import OccupancyGrid
 from affnerf.rendering.rays import pixel_rays
 
@@ -44,7 +45,7 @@ def render_view(
     intrinsics: Intrinsics,
     c2w: np.ndarray,
     background: tuple[float, float, float] | np.ndarray = (1.0, 1.0, 1.0),
-    chunk: int = 1024,
+    chunk: int = RAYS_PER_CHUNK,
     grid: OccupancyGrid | None = None,
     grid_samples: int = 32,
 ) -> RenderedView:
@@ -56,7 +57,7 @@ def render_view(
         intrinsics: the camera.
         c2w: (4, 4) camera-to-world pose in the canonical frame.
         background: RGB in [0, 1].
-        chunk: rays per forward pass (on a CPU about a thousand is fastest: larger chunks spill the caches).
+        chunk: rays per forward pass.
         grid: the object's occupancy grid: render with empty-space skipping, ``grid_samples`` per ray (fast path);
             None renders coarse-to-fine as in training.
     """

@@ -14,17 +14,16 @@ import torch
 from skimage import measure
 
 from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels
-from affnerf.objects.asset import CANONICAL_HALF_EXTENT
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import POINTS_PER_CHUNK
 from affnerf.rendering.grid import OccupancyGrid
 from affnerf.vocab import colorize_labels
 
 PointFn = Callable[[torch.Tensor], torch.Tensor]
 
-#: Default density level of the surface: a 1 cm slab at this density stops about 40 % of the light.
-DEFAULT_LEVEL = 50.0
 
 
-def grid_axis(resolution: int, half_extent: float = CANONICAL_HALF_EXTENT) -> np.ndarray:
+def grid_axis(resolution: int, half_extent: float) -> np.ndarray:
     """(resolution,) coordinates of grid samples along one axis, from -half_extent to +half_extent inclusive."""
     return np.linspace(-half_extent, half_extent, resolution)
 
@@ -33,8 +32,8 @@ def grid_axis(resolution: int, half_extent: float = CANONICAL_HALF_EXTENT) -> np
 def evaluate_grid(
     fn: PointFn,
     resolution: int,
-    half_extent: float = CANONICAL_HALF_EXTENT,
-    chunk: int = 65536,
+    half_extent: float,
+    chunk: int = POINTS_PER_CHUNK,
     occupancy: OccupancyGrid | None = None,
 ) -> np.ndarray:
     """Evaluate a scalar field on a cubic grid.
@@ -62,9 +61,7 @@ def evaluate_grid(
     return out.reshape(resolution, resolution, resolution)
 
 
-def marching_cubes(
-    volume: np.ndarray, level: float, half_extent: float = CANONICAL_HALF_EXTENT
-) -> tuple[np.ndarray, np.ndarray]:
+def marching_cubes(volume: np.ndarray, level: float, half_extent: float) -> tuple[np.ndarray, np.ndarray]:
     """The ``level`` isosurface of a grid of density, with normals pointing out of the dense region.
 
     Args:
@@ -84,7 +81,7 @@ def marching_cubes(
 
 
 @torch.no_grad()
-def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = 65536) -> np.ndarray:
+def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = POINTS_PER_CHUNK) -> np.ndarray:
     """(N,) values of ``fn`` at (N, 3) points, in chunks."""
     out = [fn(torch.from_numpy(points[s : s + chunk]).float()).cpu().numpy() for s in range(0, len(points), chunk)]
     return np.concatenate(out) if out else np.zeros(0)
@@ -93,10 +90,10 @@ def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = 65536) -> np.n
 def extract_labelled_mesh(
     density: PointFn,
     labels: PointFn,
-    resolution: int = 128,
-    level: float = DEFAULT_LEVEL,
-    half_extent: float = CANONICAL_HALF_EXTENT,
-    chunk: int = 65536,
+    resolution: int,
+    level: float,
+    half_extent: float,
+    chunk: int = POINTS_PER_CHUNK,
     occupancy: OccupancyGrid | None = None,
 ) -> LabelledMesh:
     """Marching cubes on ``density`` with vertex and face affordance labels from ``labels`` (density evaluated
@@ -116,6 +113,28 @@ def extract_labelled_mesh(
         face_props={"affordance": majority_face_labels(faces, vertex_labels).astype(np.uint8)},
         vertex_colors=colorize_labels(vertex_labels),
     )
+
+
+def model_mesh(
+    model: ConditionedNeRF,
+    encoding: object,
+    resolution: int = 128,
+    level: float | None = None,
+    occupancy: OccupancyGrid | None = None,
+) -> LabelledMesh:
+    """The labelled mesh of one encoded object in the model's scene cube.
+
+    Args:
+        model: a trained model.
+        encoding: one object's encoding (``model.encode_views`` / ``model.encode``).
+        resolution: marching-cubes samples per axis.
+        level: density of the surface; None takes the model config's ``surface_density``.
+        occupancy: the object's occupancy grid (empty-space skipping), or None to evaluate everywhere.
+    """
+    density, labels = model.point_fields(encoding)
+    surface = model.config.surface_density if level is None else level
+    return extract_labelled_mesh(density, labels, resolution, surface, model.config.scene_half_extent,
+                                 occupancy=occupancy)  # fmt: skip
 
 
 def class_areas(mesh: LabelledMesh) -> dict[int, float]:

@@ -22,7 +22,8 @@ from PIL import Image
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
 from affnerf.meshio import LabelledMesh, write_labelled_ply
-from affnerf.predict.mesh import DEFAULT_LEVEL, class_areas
+from affnerf.model.config import RAYS_PER_CHUNK
+from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
 from affnerf.viz import overlay_affordance
 
@@ -42,11 +43,12 @@ class PredictConfig:
         elevation: turntable camera elevation, degrees.
         radius: turntable camera distance, metres.
         resolution: marching-cubes grid resolution.
-        level: density of the extracted surface.
+        level: density of the extracted surface (None: the model config's ``surface_density``).
         device: ``auto``, ``cpu`` or ``cuda``.
         chunk: rays per forward pass.
         fast: render and extract the mesh with the object's occupancy grid (empty-space skipping).
-        grid_threshold: density above which a cell of the occupancy grid counts as occupied.
+        grid_threshold: density above which a cell of the occupancy grid counts as occupied (None: the model
+            config's ``occupancy_density``).
     """
 
     image: Path
@@ -59,11 +61,11 @@ class PredictConfig:
     elevation: float = 25.0
     radius: float = 0.75
     resolution: int = 128
-    level: float = DEFAULT_LEVEL
+    level: float | None = None
     device: str = "auto"
-    chunk: int = 1024
+    chunk: int = RAYS_PER_CHUNK
     fast: bool = True
-    grid_threshold: float = 5.0
+    grid_threshold: float | None = None
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
@@ -116,7 +118,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
             "mesh": {"vertices": len(mesh.vertices), "faces": len(mesh.faces), "resolution": config.resolution,
-                     "level": config.level},  # fmt: skip
+                     "level": predictor.surface_level(config.level)},  # fmt: skip
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")

@@ -22,10 +22,11 @@ from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.errors import input_error
 from affnerf.meshio import LabelledMesh
 from affnerf.model.affnerf import Codes
+from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import RenderedView, render_view
 from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.loading import LoadedModel, load_model
-from affnerf.predict.mesh import DEFAULT_LEVEL, extract_labelled_mesh
+from affnerf.predict.mesh import model_mesh
 from affnerf.rendering.grid import OccupancyGrid
 
 
@@ -70,17 +71,17 @@ class Predictor:
         fast: render and extract meshes with the object's occupancy grid (empty-space skipping); False renders
             coarse-to-fine as in training and evaluates the density everywhere.
         grid_resolution: cells per side of the occupancy grid.
-        grid_threshold: density above which a cell is occupied.
+        grid_threshold: density above which a cell is occupied (None: the model config's ``occupancy_density``).
         grid_samples: samples per ray inside occupied cells.
     """
 
     def __init__(
         self,
         loaded: LoadedModel,
-        chunk: int = 1024,
+        chunk: int = RAYS_PER_CHUNK,
         fast: bool = True,
         grid_resolution: int = 64,
-        grid_threshold: float = 5.0,
+        grid_threshold: float | None = None,
         grid_samples: int = 32,
     ) -> None:
         self.loaded = loaded
@@ -89,7 +90,7 @@ class Predictor:
         self.grid_resolution, self.grid_threshold, self.grid_samples = grid_resolution, grid_threshold, grid_samples
 
     @classmethod
-    def load(cls, path: Path, device: str = "auto", chunk: int = 1024, **options: object) -> Predictor:
+    def load(cls, path: Path, device: str = "auto", chunk: int = RAYS_PER_CHUNK, **options: object) -> Predictor:
         """Load from a run folder or checkpoint file (an AFF-NeRF: prediction from a photo needs no pose)."""
         loaded = load_model(Path(path), pick_device(device))
         if loaded.model.config.kind != "affnerf":
@@ -124,8 +125,11 @@ class Predictor:
         return render_view(self.loaded.model, obj.codes, intrinsics, c2w, self.loaded.background, self.chunk,
                            grid, self.grid_samples)  # fmt: skip
 
-    def mesh(self, obj: EncodedObject, resolution: int = 128, level: float = DEFAULT_LEVEL) -> LabelledMesh:
-        """The labelled mesh of the object (marching cubes in the canonical cube)."""
-        density, labels = self.loaded.model.point_fields(obj.codes)
-        occupancy = self.grid(obj) if self.fast else None
-        return extract_labelled_mesh(density, labels, resolution, level, chunk=65536, occupancy=occupancy)
+    def surface_level(self, level: float | None = None) -> float:
+        """The density of extracted surfaces: ``level`` when given, else the model config's ``surface_density``."""
+        return self.loaded.model.config.surface_density if level is None else float(level)
+
+    def mesh(self, obj: EncodedObject, resolution: int = 128, level: float | None = None) -> LabelledMesh:
+        """The labelled mesh of the object (marching cubes in the model's scene cube, at the model's surface
+        density unless ``level`` is given)."""
+        return model_mesh(self.loaded.model, obj.codes, resolution, level, self.grid(obj) if self.fast else None)

@@ -1,7 +1,7 @@
 """Occupancy grids for empty-space skipping at inference (the fast path of issue 6).
 
 Once an object is encoded its field no longer changes, so its density can be evaluated once on a coarse grid
-over the canonical cube. Rays then place their samples only inside occupied cells: a few candidate positions
+over the scene cube. Rays then place their samples only inside occupied cells: a few candidate positions
 per cell along the ray are checked against the grid, and the samples are spread over the occupied stretches by
 inverse transform sampling. Rays that cross no occupied cell render background without evaluating the field.
 """
@@ -14,8 +14,6 @@ from dataclasses import dataclass
 import torch
 import torch.nn.functional as F
 
-from affnerf.objects.asset import CANONICAL_HALF_EXTENT
-
 
 @dataclass
 class OccupancyGrid:
@@ -27,7 +25,7 @@ class OccupancyGrid:
     """
 
     occupied: torch.Tensor
-    half_extent: float = CANONICAL_HALF_EXTENT
+    half_extent: float
 
     @property
     def resolution(self) -> int:
@@ -45,20 +43,31 @@ class OccupancyGrid:
 @torch.no_grad()
 def build_grid(
     density: Callable[[torch.Tensor], torch.Tensor],
+    half_extent: float,
     resolution: int = 64,
     threshold: float = 1.0,
     dilation: int = 1,
-    half_extent: float = CANONICAL_HALF_EXTENT,
-    chunk: int = 65536,
+    chunk: int | None = None,
     device: torch.device | str = "cpu",
 ) -> OccupancyGrid:
-    """Evaluate ``density`` at the cell centres and mark cells above ``threshold``, grown by ``dilation`` cells
-    (so thin structures between cell centres are not lost)."""
+    """Evaluate ``density`` at the cell centres of the cube [-half_extent, half_extent]^3 and mark cells above
+    ``threshold``, grown by ``dilation`` cells (so thin structures between cell centres are not lost).
+
+    Args:
+        density: (N, 3) points -> (N,) densities.
+        half_extent: half the cube's side, metres.
+        resolution: cells per side.
+        threshold: density above which a cell is occupied.
+        dilation: cells by which the occupied region grows.
+        chunk: points per call of ``density`` (None: all in one call).
+        device: where the grid lives.
+    """
     cell = 2 * half_extent / resolution
     axis = torch.linspace(-half_extent + cell / 2, half_extent - cell / 2, resolution, device=device)
     xs, ys, zs = torch.meshgrid(axis, axis, axis, indexing="ij")
     points = torch.stack([xs.reshape(-1), ys.reshape(-1), zs.reshape(-1)], dim=-1)
-    values = torch.cat([density(points[s : s + chunk]) for s in range(0, len(points), chunk)])
+    step = chunk or len(points)
+    values = torch.cat([density(points[s : s + step]) for s in range(0, len(points), step)])
     occupied = (values > threshold).reshape(resolution, resolution, resolution)
     if dilation > 0:
         k = 2 * dilation + 1

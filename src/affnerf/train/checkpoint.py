@@ -16,7 +16,7 @@ import torch
 
 from affnerf.errors import input_error
 from affnerf.fileio import atomic_write
-from affnerf.model.config import ModelConfig
+from affnerf.model.config import NON_ARCHITECTURE_FIELDS, ModelConfig
 
 FORMAT = "affnerf-checkpoint-1"
 _NAME = re.compile(r"^step_(\d{8})\.pt$")
@@ -73,7 +73,7 @@ def check_compatible(data: dict[str, Any], model: ModelConfig, num_classes: int,
     """Refuse a checkpoint made with another architecture or class count, naming what differs."""
     saved = data.get("model_config", {})
     ours = dataclasses.asdict(model)
-    arch_keys = [k for k in ours if k not in ("num_coarse", "num_fine", "near", "far", "clip_to_cube")]
+    arch_keys = [k for k in ours if k not in NON_ARCHITECTURE_FIELDS]
     diff = [f"{k} {saved.get(k, 'affnerf' if k == 'kind' else None)!r} vs {ours[k]!r}" for k in arch_keys
             if saved.get(k, "affnerf" if k == "kind" else None) != ours[k]]  # fmt: skip
     if diff:

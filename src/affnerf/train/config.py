@@ -14,6 +14,7 @@ from typing import Any, Literal
 from affnerf.errors import AffnerfError, input_error
 from affnerf.fileio import read_json_file
 from affnerf.model.config import ModelConfig
+from affnerf.model.config import RAYS_PER_CHUNK
 
 
 @dataclass(frozen=True)
@@ -89,7 +90,7 @@ class TrainConfig:
     val_every: int = 5000
     val_objects: int = 2
     val_scale: float = 0.25
-    chunk: int = 1024
+    chunk: int = RAYS_PER_CHUNK
     cache_dir: Path | None = None
     progress: bool = True
     stop_at: int = 0

@@ -13,6 +13,7 @@ from affnerf.metrics.image import psnr
 from affnerf.metrics.segmentation import confusion_matrix, mean_iou, pixel_accuracy
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.inputs import dataset_views
+from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import render_view
 from affnerf.viz import depth_to_color, overlay_affordance
 
@@ -44,7 +45,7 @@ def validate(
     objects: list[ObjectData],
     scale: float,
     views_per_object: int = 2,
-    chunk: int = 1024,
+    chunk: int = RAYS_PER_CHUNK,
     input_views: int = 1,
 ) -> ValidationResult:
     """Encode the first views of each object and render ``views_per_object`` others at ``scale`` of their size."""

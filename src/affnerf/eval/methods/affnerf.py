@@ -9,6 +9,7 @@ import torch
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet
 from affnerf.model.inputs import dataset_views
+from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import render_view
 from affnerf.predict.loading import LoadedModel
 
@@ -22,7 +23,7 @@ class ConditionedNeRFMethod:
         fast: render with the object's occupancy grid (empty-space skipping).
     """
 
-    def __init__(self, loaded: LoadedModel, chunk: int = 1024, fast: bool = True) -> None:
+    def __init__(self, loaded: LoadedModel, chunk: int = RAYS_PER_CHUNK, fast: bool = True) -> None:
         self.loaded = loaded
         self.chunk = chunk
         self.fast = fast

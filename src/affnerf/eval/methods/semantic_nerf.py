@@ -16,6 +16,7 @@ from affnerf.eval.protocol import Prediction, TargetSet, resized
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.raymarch import Condition, FieldRenderer
+from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import render_view
 from affnerf.train.cache import frames_from_arrays
 from affnerf.train.loss import nerf_loss
@@ -71,7 +72,7 @@ class SemanticNeRFMethod:
     """Fits an :class:`ObjectNeRF` on each object's input views (at the scored resolution)."""
 
     def __init__(
-        self, num_classes: int, config: SemanticNeRFConfig = SemanticNeRFConfig(), chunk: int = 1024, fast: bool = True
+        self, num_classes: int, config: SemanticNeRFConfig = SemanticNeRFConfig(), chunk: int = RAYS_PER_CHUNK, fast: bool = True
     ) -> None:
         self.num_classes, self.config, self.chunk, self.fast = num_classes, config, chunk, fast
         self.name = "semantic-nerf"
