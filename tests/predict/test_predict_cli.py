@@ -79,3 +79,13 @@ def test_a_pixelnerf_run_cannot_predict_from_a_photo(trained_runs, photo, tmp_pa
     args = ["predict", "--run", str(trained_runs["pixelnerf"]), "--image", str(photo["rgb"]), "--out", str(tmp_path / "x")]
     assert main(args) == 2
     assert "needs the input camera's pose" in capsys.readouterr().err
+
+
+def test_a_folder_as_image_says_it_is_a_directory(trained_runs, tmp_path, capsys):
+    folder = tmp_path / "photos"
+    folder.mkdir()
+    args = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(folder), "--out", str(tmp_path / "p"), "--device", "cpu"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"affnerf: error: {folder}: is a directory, not an image; give one image file (PNG, JPEG, ...)"
+    assert not (tmp_path / "p" / "prediction.json").exists()

@@ -34,8 +34,10 @@ def write_labels(path: Path, labels: np.ndarray) -> None:
 
 
 def open_image(path: Path) -> Image.Image:
-    """Open and fully decode an image, reporting a missing, corrupt or empty file as one line."""
+    """Open and fully decode an image, reporting a folder, a missing, corrupt or empty file as one line."""
     path = Path(path)
+    if path.is_dir():
+        raise input_error(path, "is a directory, not an image; give one image file (PNG, JPEG, ...)")
     if not path.is_file():
         raise input_error(path, "file not found")
     try:
