@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import json
 import shutil
+import textwrap
 
 import numpy as np
 import pytest
 from PIL import Image
 
 from affnerf.cli.main import main
-from affnerf.data.partnet import write_partnet_fixture
+from affnerf.data.partnet import load_mapping, write_partnet_fixture
+from affnerf.vocab import AFFORDANCE_CLASSES
 
 
 def _error_line(capsys) -> str:
@@ -88,3 +90,35 @@ def test_import_keeps_an_existing_dataset_intact_on_error(tmp_path, capsys, tiny
     _error_line(capsys)
     assert (out / "dataset.json").read_bytes() == before
     assert not (out / "cabinet").exists()
+
+
+def _help_text(capsys, *verb: str) -> str:
+    with pytest.raises(SystemExit) as exit_info:
+        main([*verb, "--help"])
+    assert exit_info.value.code == 0
+    return capsys.readouterr().out
+
+
+def _mapping_example(help_text: str) -> str:
+    """The YAML block of the help text: the indented lines after 'a minimal one (YAML):'."""
+    after = help_text.split("a minimal one (YAML):", 1)[1].splitlines()
+    block = after[: next(i for i, line in enumerate(after) if line.startswith("Affordances"))]
+    return textwrap.dedent("\n".join(line for line in block if line.strip())) + "\n"
+
+
+def test_a_model_cat_without_mapping_says_how_to_give_one_and_the_help_example_works(tmp_path, capsys):
+    src = write_partnet_fixture(tmp_path / "mug", model_cat="Mug")
+    out = tmp_path / "ds"
+    args = ["data", "import-partnet", str(src), "--out", str(out), "--views", "1", "--width", "16", "--height", "12"]
+    assert main(args) == 2
+    line = _error_line(capsys)
+    assert "meta.json: model_cat 'Mug' has no mapping (known: Bottle," in line
+    assert line.endswith("give one with --mapping FILE (a minimal file is shown by 'affnerf data import-partnet --help')")
+    help_text = _help_text(capsys, "data", "import-partnet")
+    assert ", ".join(AFFORDANCE_CLASSES[1:]) in " ".join(help_text.split())
+    example = tmp_path / "mapping.yaml"
+    example.write_text(_mapping_example(help_text))
+    entry = load_mapping(example)["Mug"]  # the example loads with the code that reads mapping files
+    assert (entry.category, entry.default, entry.parts) == ("mug", "contain", {"handle": "grasp"})
+    assert main([*args, "--mapping", str(example)]) == 0
+    assert json.loads((out / "dataset.json").read_text())["objects"][0]["category"] == "mug"

@@ -35,7 +35,18 @@ def generate(config: Annotated[GenerateConfig, tyro.conf.arg(name="")]) -> None:
 def import_partnet(src: Positional[list[Path]], config: Annotated[ImportConfig, tyro.conf.arg(name="")]) -> None:
     """Add PartNet-Mobility objects (folders with mobility.urdf, result.json, textured_objs/, meta.json) to a dataset.
 
-    Leaf part names map to affordances through the shipped table (GUIDE 3); --mapping FILE overrides it.
+    Leaf part names map to affordances through the shipped table (docs/conventions.md §3); --mapping FILE overrides
+    or extends it. A model_cat the table lacks needs a mapping file; a minimal one (YAML):
+
+        Mug:                # meta.json's model_cat
+          category: mug     # the affnerf category to file it under
+          default: contain  # the affordance of parts not named below
+          parts:            # optional: result.json part name -> affordance
+            handle: grasp
+
+    Affordances: grasp, cut, screw, write, open, pull, pour, contain, wear, view, support.
+
+    Exit codes: 0 done; 2 bad input (a malformed object, a model_cat without mapping).
     """
     from affnerf.data.importer import import_partnet as run
 

@@ -158,13 +158,18 @@ def category_mapping(table: dict[str, CategoryMapping], model_cat: str, meta_pat
     """The entry of ``model_cat``.
 
     Raises:
-        AffnerfError: naming ``meta_path`` when the table has no such category.
+        AffnerfError: naming ``meta_path`` when the table has no such category, and how to give one (``--mapping
+            FILE``; ``affnerf data import-partnet --help`` shows a minimal file).
     """
     try:
         return table[model_cat]
     except KeyError:
         known = ", ".join(sorted(table))
-        raise input_error(meta_path, f"model_cat {model_cat!r} has no mapping (known: {known})") from None
+        raise input_error(
+            meta_path,
+            f"model_cat {model_cat!r} has no mapping (known: {known}); give one with --mapping FILE "
+            f"(a minimal file is shown by 'affnerf data import-partnet --help')",
+        ) from None
 
 
 def leaf_affordance(
