@@ -122,3 +122,19 @@ def test_a_model_cat_without_mapping_says_how_to_give_one_and_the_help_example_w
     assert (entry.category, entry.default, entry.parts) == ("mug", "contain", {"handle": "grasp"})
     assert main([*args, "--mapping", str(example)]) == 0
     assert json.loads((out / "dataset.json").read_text())["objects"][0]["category"] == "mug"
+
+
+def test_reimport_with_other_settings_exits_2_naming_overwrite_which_replaces(tmp_path, capsys):
+    src = write_partnet_fixture(tmp_path / "toy")
+    out = tmp_path / "ds"
+    args = ["data", "import-partnet", str(src), "--out", str(out), "--width", "16", "--height", "12"]
+    assert main([*args, "--views", "1"]) == 0
+    capsys.readouterr()
+    assert main([*args, "--views", "2"]) == 2
+    line = _error_line(capsys)
+    folder = out / "cabinet" / "cabinet_pmtoy"
+    assert line == (f"affnerf: error: {folder / 'transforms.json'}: already imported with views=1, not 2; import with "
+                    "the same settings, pass --overwrite to replace it, or use another --out")  # fmt: skip
+    assert len(list((folder / "rgb").iterdir())) == 1
+    assert main([*args, "--views", "2", "--overwrite"]) == 0
+    assert len(list((folder / "rgb").iterdir())) == 2

@@ -46,7 +46,11 @@ def import_partnet(src: Positional[list[Path]], config: Annotated[ImportConfig, 
 
     Affordances: grasp, cut, screw, write, open, pull, pour, contain, wear, view, support.
 
-    Exit codes: 0 done; 2 bad input (a malformed object, a model_cat without mapping).
+    An object already in the dataset is kept when imported again with the same settings; with other settings
+    (views, size, joint state, split, seed, mapping) the import is refused unless --overwrite replaces it.
+
+    Exit codes: 0 done; 2 bad input (a malformed object, a model_cat without mapping, an object already imported
+    with other settings and no --overwrite; nothing is written).
     """
     from affnerf.data.importer import import_partnet as run
 

@@ -72,6 +72,22 @@ def surface_from_record(mesh: LabelledMesh) -> SurfaceMesh:
     )
 
 
+def swap_in(root: Path, new: Path, final: Path, object_id: str) -> None:
+    """Replace the complete folder ``final`` by the complete folder ``new``: two renames, the old copy deleted last.
+
+    The old folder is first moved under ``root/.partial/``; if moving ``new`` into place then fails, it is moved
+    back, so a failure leaves the old copy where it was.
+    """
+    old = Path(root) / PARTIAL_DIR / f"{object_id}.replaced.{os.getpid()}.{uuid.uuid4().hex[:8]}"
+    os.rename(final, old)
+    try:
+        os.rename(new, final)
+    except BaseException:
+        os.rename(old, final)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
 def frame_paths(index: int, digits: int) -> tuple[str, str, str, str]:
     """Relative paths of the four maps of frame ``index`` (e.g. ``rgb/007.png``)."""
     name = f"{index:0{digits}d}.png"
@@ -87,6 +103,7 @@ def write_object(
     background: tuple[float, float, float] = (1.0, 1.0, 1.0),
     extra: dict[str, Any] | None = None,
     on_frame: Callable[[], None] | None = None,
+    replace: bool = False,
 ) -> Path:
     """Render ``asset`` from every pose and write its complete folder at ``root / entry.path``.
 
@@ -99,6 +116,7 @@ def write_object(
         background: RGB in [0, 1]; use multiples of 1/255 so background pixels equal it exactly.
         extra: more keys for ``transforms.json``.
         on_frame: called after each frame is written (progress).
+        replace: replace a complete folder already there (see :func:`swap_in`); by default it is kept.
 
     Returns:
         The object folder.
@@ -147,7 +165,9 @@ def write_object(
         )
         write_json_atomic(tmp / "transforms.json", record.to_json())
         final.parent.mkdir(parents=True, exist_ok=True)
-        if is_complete(final):  # another process finished the same object first: keep its copy
+        if is_complete(final) and replace:
+            swap_in(root, tmp, final, entry.id)
+        elif is_complete(final):  # another process finished the same object first: keep its copy
             shutil.rmtree(tmp)
         else:
             if final.exists():  # a folder without transforms.json is debris, never a finished object
