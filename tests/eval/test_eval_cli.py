@@ -12,7 +12,7 @@ from PIL import Image
 from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
 from affnerf.eval.runner import EvalConfig, build_method
-from affnerf.predict import loading
+from affnerf.eval.methods import affnerf as conditioned_methods
 from affnerf.eval.protocol import METRIC_KEYS
 
 
@@ -52,7 +52,7 @@ def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dat
 
 def test_wrong_run_for_a_method_is_a_clear_error(trained_runs, train_dataset, tmp_path, capsys):
     assert _eval(trained_runs["pixelnerf"], train_dataset, tmp_path / "e", "affnerf") == 2
-    assert "method affnerf needs a affnerf run, this is a pixelnerf run" in capsys.readouterr().err
+    assert "method affnerf needs a run of kind affnerf, this run is of kind pixelnerf" in capsys.readouterr().err
     assert _eval(trained_runs["affnerf"], train_dataset, tmp_path / "e", "nerfacto") == 2
     assert "unknown method 'nerfacto'" in capsys.readouterr().err
 
@@ -96,12 +96,12 @@ def test_retrieval_bank_holds_only_the_categories_the_run_trained_on(trained_run
     config = EvalConfig(run=trained_runs["affnerf"], data=train_dataset, out=train_dataset, device="cpu")
     every = build_method("retrieval", config, ds)
     assert {e.category for e in every.entries} == {"bottle", "screwdriver"}
-    original = loading.load_model
+    original = conditioned_methods.load_model
 
     def trained_on_bottles(path, device="cpu"):
         loaded = original(path, device)
         return replace(loaded, train_config={**loaded.train_config, "categories": "bottle"})
 
-    monkeypatch.setattr(loading, "load_model", trained_on_bottles)
+    monkeypatch.setattr(conditioned_methods, "load_model", trained_on_bottles)
     bottles = build_method("retrieval", config, ds)
     assert {e.category for e in bottles.entries} == {"bottle"}

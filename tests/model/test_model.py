@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import pytest
 import torch
 
 from affnerf.model.affnerf import AffNeRF
@@ -90,3 +92,15 @@ def test_a_batch_where_no_ray_meets_the_cube_renders_background():
     dirs = torch.tensor([[0.0, 0.0, -1.0]] * 3)
     coarse, fine = model.render_rays(codes, torch.zeros(3, dtype=torch.long), origins, dirs, torch.ones(3, 3))
     assert torch.all(fine.rgb == 1) and torch.all(fine.opacity == 0) and torch.all(fine.affordance[:, 0] == 1)
+
+
+def test_every_config_kind_has_a_registered_model():
+    from affnerf.model.registry import MODEL_KINDS, build_model, config_kinds
+
+    assert set(config_kinds()) == set(MODEL_KINDS)
+    small = ModelConfig(encoder_width=0.125, encoder_resolution=32, field_width=16, field_depth=2, color_width=8,
+                        affordance_width=8, num_coarse=4, num_fine=0)  # fmt: skip
+    for kind in config_kinds():
+        assert type(build_model(replace(small, kind=kind), 5)) is MODEL_KINDS[kind]
+    with pytest.raises(ValueError, match="unknown model kind 'nerfacto'"):
+        build_model(replace(small, kind="nerfacto"), 5)  # type: ignore[arg-type]

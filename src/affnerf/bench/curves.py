@@ -19,7 +19,7 @@ import torch
 from affnerf.data.dataset import Dataset
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, evaluate
-from affnerf.model.factory import build_model
+from affnerf.model.registry import build_model
 from affnerf.predict.loading import load_model
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.config import TrainConfig, config_to_json

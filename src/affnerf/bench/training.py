@@ -13,7 +13,7 @@ from typing import Any
 import torch
 
 from affnerf.bench.timing import sync, timed
-from affnerf.model.factory import build_model
+from affnerf.model.registry import build_model
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.config import TrainConfig
 from affnerf.train.loss import nerf_loss

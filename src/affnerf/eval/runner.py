@@ -17,12 +17,11 @@ from PIL import Image
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.format import write_json_atomic
 from affnerf.errors import AffnerfError
+import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
 from affnerf.eval.protocol import Method, ProtocolConfig, evaluate
+from affnerf.eval.registry import MethodContext, method_spec, parse_methods
 from affnerf.eval.report import figure_grid, read_method_results, save_examples, table2_markdown
 from affnerf.model.config import RAYS_PER_CHUNK
-
-METHODS = ("affnerf", "pixelnerf", "semantic-nerf", "retrieval", "constant")
-
 
 @dataclass(frozen=True)
 class EvalConfig:
@@ -35,7 +34,8 @@ class EvalConfig:
         out: output folder.
         split: ``test`` (held-out instances), ``unseen`` (held-out categories), ``val``, or ``all`` (every object,
             e.g. of a category a leave-one-category-out run never saw).
-        method: one or more of affnerf, pixelnerf, semantic-nerf, retrieval, constant (comma-separated).
+        method: one or more registered methods, comma-separated (built in: affnerf, pixelnerf, semantic-nerf,
+            retrieval, constant; ``all`` = every method but constant); see :mod:`affnerf.eval.registry`.
         input_views: views each method is given (1: single image; PixelNeRF-M is also run with 3, Semantic-NeRF
             with 20 as a many-view reference).
         target_views: views scored per object (K = 20 in GUIDE 5).
@@ -68,15 +68,6 @@ class EvalConfig:
     fast: bool = True
 
 
-def parse_methods(text: str) -> list[str]:
-    """Method names from ``a,b`` or ``all``, validated."""
-    names = list(METHODS[:4]) if text.strip() == "all" else [t.strip() for t in text.split(",") if t.strip()]
-    for name in names:
-        if name not in METHODS:
-            raise AffnerfError(f"unknown method {name!r} (known: {', '.join(METHODS)})")
-    return names
-
-
 def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
     entries = ds.objects(None if config.split == "all" else config.split, config.categories)
     if not entries:
@@ -99,29 +90,9 @@ def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
 
 
 def build_method(name: str, config: EvalConfig, ds: Dataset) -> Method:
-    """The method object for a name (loading the run it needs)."""
-    from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
-    from affnerf.eval.methods.constant import ConstantMethod
-    from affnerf.eval.methods.retrieval import RetrievalMethod
-    from affnerf.eval.methods.semantic_nerf import SemanticNeRFConfig, SemanticNeRFMethod
-    from affnerf.predict.loading import load_model
-    from affnerf.predict.predictor import pick_device
-
-    if name == "constant":
-        return ConstantMethod(0)
-    if name == "semantic-nerf":
-        return SemanticNeRFMethod(len(ds.affordance_classes), SemanticNeRFConfig(steps=config.semantic_steps), config.chunk,
-                                  config.fast)  # fmt: skip
-    loaded = load_model(config.run, pick_device(config.device))
-    kind = loaded.model.config.kind
-    wanted = "pixelnerf" if name == "pixelnerf" else "affnerf"
-    if kind != wanted:
-        raise AffnerfError(f"{loaded.path}: method {name} needs a {wanted} run, this is a {kind} run")
-    if loaded.classes != ds.affordance_classes:
-        raise AffnerfError(f"{loaded.path}: trained with other affordance classes than {ds.root / 'dataset.json'}")
-    if name == "retrieval":  # the bank holds only what the run trained on: no peeking at a held-out category
-        return RetrievalMethod(loaded, ds, loaded.train_config.get("categories") or None)
-    return ConditionedNeRFMethod(loaded, config.chunk, config.fast)
+    """The method registered under ``name``, built for this evaluation (loading the run it needs)."""
+    context = MethodContext(ds, Path(config.run), config.device, config.chunk, config.fast, config.semantic_steps)
+    return method_spec(name).build(context)
 
 
 def method_label(name: str, input_views: int) -> str:

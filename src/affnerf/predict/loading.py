@@ -9,7 +9,7 @@ import torch
 
 from affnerf.errors import input_error
 from affnerf.model.base import ConditionedNeRF
-from affnerf.model.factory import build_model
+from affnerf.model.registry import build_model
 from affnerf.model.config import ModelConfig
 from affnerf.train.checkpoint import list_checkpoints, load_checkpoint
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet
+from affnerf.eval.registry import MethodContext, MethodSpec, register_method
 
 
 class ConstantMethod:
@@ -18,3 +19,10 @@ class ConstantMethod:
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         shape = (len(targets.poses), targets.intrinsics.height, targets.intrinsics.width)
         return Prediction(np.full(shape, self.class_id, np.uint8))
+
+
+def _build(context: MethodContext) -> ConstantMethod:
+    return ConstantMethod(0)
+
+
+register_method(MethodSpec("constant", _build, "background everywhere: the floor any method must clear", in_all=False))

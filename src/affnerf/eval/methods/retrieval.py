@@ -16,6 +16,7 @@ from affnerf.data.render import Renderer
 from affnerf.data.writer import surface_from_record
 from affnerf.errors import input_error
 from affnerf.eval.protocol import Prediction, TargetSet
+from affnerf.eval.registry import MethodContext, MethodSpec, register_method
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import LoadedModel
@@ -102,3 +103,14 @@ class RetrievalMethod:
         renderer = self._renderers[entry.id]
         frames = [renderer.render(targets.intrinsics, pose) for pose in targets.poses]
         return Prediction(np.stack([f.affordance for f in frames]), np.stack([f.rgb / 255.0 for f in frames]))
+
+
+def _build(context: MethodContext) -> RetrievalMethod:
+    """The bank holds only what the run trained on: no peeking at a held-out category."""
+    from affnerf.eval.methods.affnerf import load_run
+
+    loaded = load_run(context, "affnerf", "retrieval")
+    return RetrievalMethod(loaded, context.dataset, loaded.train_config.get("categories") or None)
+
+
+register_method(MethodSpec("retrieval", _build, "the nearest training object by AFF-NeRF shape code, its true labels"))

@@ -13,6 +13,7 @@ import torch
 
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet, resized
+from affnerf.eval.registry import MethodContext, MethodSpec, register_method
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.raymarch import Condition, FieldRenderer
@@ -110,3 +111,11 @@ class SemanticNeRFMethod:
             grid = model.occupancy(None) if self.fast else None
         views = [render_view(model, None, targets.intrinsics, p, targets.background, self.chunk, grid) for p in targets.poses]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))
+
+
+def _build(context: MethodContext) -> SemanticNeRFMethod:
+    classes = len(context.dataset.affordance_classes)
+    return SemanticNeRFMethod(classes, SemanticNeRFConfig(steps=context.semantic_steps), context.chunk, context.fast)
+
+
+register_method(MethodSpec("semantic-nerf", _build, "Semantic-NeRF fitted per object on its input views"))

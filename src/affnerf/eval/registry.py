@@ -1,0 +1,92 @@
+"""Evaluation methods by name: each method module registers how it is built, and ``affnerf eval --method NAME``
+looks it up here (as nerfstudio's method configs are looked up by name).
+
+Add a method by writing a class with the :class:`~affnerf.eval.protocol.Method` interface in
+``eval/methods/<name>.py``, registering a :class:`MethodSpec` at the bottom of that module, and importing the
+module in ``eval/methods/__init__.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from affnerf.data.dataset import Dataset
+from affnerf.errors import AffnerfError
+from affnerf.eval.protocol import Method
+
+
+@dataclass(frozen=True)
+class MethodContext:
+    """What building a method may use.
+
+    Attributes:
+        dataset: the evaluated dataset (baselines that need training objects read them here).
+        run: the trained run given to ``affnerf eval --run``.
+        device: ``auto``, ``cpu`` or ``cuda``.
+        chunk: rays per forward pass.
+        fast: render with the objects' occupancy grids (empty-space skipping).
+        semantic_steps: optimisation steps of each per-object Semantic-NeRF.
+    """
+
+    dataset: Dataset
+    run: Path
+    device: str
+    chunk: int
+    fast: bool
+    semantic_steps: int
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A registered method.
+
+    Attributes:
+        name: what ``--method`` calls it.
+        build: makes the method from a context (loading any run it needs).
+        summary: one line for ``--help`` and error messages.
+        in_all: whether ``--method all`` includes it.
+    """
+
+    name: str
+    build: Callable[[MethodContext], Method]
+    summary: str
+    in_all: bool = True
+
+
+_METHODS: dict[str, MethodSpec] = {}
+
+
+def register_method(spec: MethodSpec) -> MethodSpec:
+    """Make ``spec`` available by its name; registering a name twice is an error."""
+    if spec.name in _METHODS:
+        raise ValueError(f"evaluation method {spec.name!r} is registered twice")
+    _METHODS[spec.name] = spec
+    return spec
+
+
+def method_names() -> list[str]:
+    """Registered names, in registration order."""
+    return list(_METHODS)
+
+
+def method_spec(name: str) -> MethodSpec:
+    """The spec registered under ``name``.
+
+    Raises:
+        AffnerfError: for an unknown name, listing the known ones.
+    """
+    if name not in _METHODS:
+        raise AffnerfError(f"unknown method {name!r} (known: {', '.join(_METHODS)})")
+    return _METHODS[name]
+
+
+def parse_methods(text: str) -> list[str]:
+    """Method names from ``a,b`` or ``all`` (every method with ``in_all``), each checked against the registry."""
+    if text.strip() == "all":
+        return [name for name, spec in _METHODS.items() if spec.in_all]
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    for name in names:
+        method_spec(name)
+    return names

@@ -1,0 +1,41 @@
+"""Model kinds by name: ``ModelConfig.kind`` picks the class that :func:`build_model` instantiates.
+
+A new kind (a field conditioned differently, say) is a :class:`~affnerf.model.base.ConditionedNeRF` subclass
+taking ``(config, num_classes)``, added to :data:`MODEL_KINDS` with :func:`register_model` and to the ``kind``
+literal of :class:`~affnerf.model.config.ModelConfig` (which the command line offers as choices).
+"""
+
+from __future__ import annotations
+
+from typing import get_args, get_type_hints
+
+from affnerf.model.affnerf import AffNeRF
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import ModelConfig
+from affnerf.model.pixelnerf import PixelNeRF
+
+#: Kind name -> model class.
+MODEL_KINDS: dict[str, type[ConditionedNeRF]] = {"affnerf": AffNeRF, "pixelnerf": PixelNeRF}
+
+
+def register_model(kind: str, cls: type[ConditionedNeRF]) -> None:
+    """Make ``cls`` buildable as ``kind``; a name registered twice is an error."""
+    if kind in MODEL_KINDS:
+        raise ValueError(f"model kind {kind!r} is registered twice")
+    MODEL_KINDS[kind] = cls
+
+
+def config_kinds() -> tuple[str, ...]:
+    """The kinds ``ModelConfig.kind`` accepts."""
+    return get_args(get_type_hints(ModelConfig)["kind"])
+
+
+def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
+    """The model ``config.kind`` names, with ``num_classes`` affordance classes.
+
+    Raises:
+        ValueError: for a kind no class is registered under.
+    """
+    if config.kind not in MODEL_KINDS:
+        raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
+    return MODEL_KINDS[config.kind](config, num_classes)

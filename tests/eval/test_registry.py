@@ -1,0 +1,40 @@
+"""The evaluation-method registry: names, ``all``, unknown names, and a method added from outside."""
+
+from __future__ import annotations
+
+import pytest
+
+import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
+from affnerf.errors import AffnerfError
+from affnerf.eval import registry
+from affnerf.eval.methods.constant import ConstantMethod
+from affnerf.eval.registry import MethodContext, MethodSpec, method_names, parse_methods, register_method
+
+
+def test_builtin_methods_are_registered_in_order():
+    assert method_names()[:5] == ["affnerf", "pixelnerf", "semantic-nerf", "retrieval", "constant"]
+
+
+def test_all_leaves_out_the_constant_floor():
+    assert parse_methods("all") == ["affnerf", "pixelnerf", "semantic-nerf", "retrieval"]
+    assert parse_methods(" retrieval , constant ") == ["retrieval", "constant"]
+
+
+def test_unknown_method_names_the_known_ones():
+    with pytest.raises(AffnerfError, match=r"unknown method 'nerfacto' \(known: affnerf, pixelnerf"):
+        parse_methods("affnerf,nerfacto")
+
+
+def test_a_registered_method_is_built_by_name(tmp_path):
+    spec = MethodSpec("constant-grasp", lambda context: ConstantMethod(1), "grasp everywhere", in_all=False)
+    register_method(spec)
+    try:
+        with pytest.raises(ValueError, match="registered twice"):
+            register_method(spec)
+        assert "constant-grasp" in parse_methods("constant-grasp")
+        context = MethodContext(None, tmp_path, "cpu", 64, True, 1)  # type: ignore[arg-type]
+        method = registry.method_spec("constant-grasp").build(context)
+        assert method.name == "constant-1"
+        assert "constant-grasp" not in parse_methods("all")
+    finally:
+        registry._METHODS.pop("constant-grasp", None)
