@@ -6,7 +6,8 @@ mesh files, a fixed base joint with ``rpy = (pi/2, 0, -pi/2)`` turning that z-up
 handle. The door panel's OBJ has two materials, its front textured by ``images/texture_0.png`` through UVs and
 the other sides plain, with faces without ``vt`` as in real files. ``result.json`` nests the frame body as
 ``cabinet_frame/other/other_leaf``, so its affordance is found only through an ancestor; two leaves are named
-``handle``.
+``handle``. With ``doubled_faces`` every face is written twice as in real files, the extra copy in the opposite
+winding and a plain white material (``material_back``), listed before the face it backs.
 """
 
 from __future__ import annotations
@@ -72,12 +73,24 @@ def _box_sides(lo: np.ndarray, hi: np.ndarray) -> list[tuple[str, np.ndarray]]:
     return sides
 
 
-def box_obj_text(box: _Box, nan_vertex: bool = False) -> str:
+def back_copies(faces: list[str]) -> list[str]:
+    """``f`` lines of the same faces in the opposite winding, without ``vt``, in the white ``material_back``.
+
+    Example:
+        >>> back_copies(["f 1/1 2/2 3/3"])
+        ['usemtl material_back', 'f 3 2 1']
+    """
+    reversed_faces = [" ".join(["f", *(c.split("/")[0] for c in line.split()[:0:-1])]) for line in faces]
+    return ["usemtl material_back", *reversed_faces]
+
+
+def box_obj_text(box: _Box, nan_vertex: bool = False, doubled: bool = False) -> str:
     """The OBJ text of a box: 4 vertices per side; the +z side textured (``vt``) when ``box.textured_front``.
 
     Args:
         box: the box.
         nan_vertex: write the first vertex as ``nan`` (a broken file for tests).
+        doubled: write every face a second time, first, in the opposite winding (see :func:`back_copies`).
     """
     lines = [f"# affnerf PartNet-Mobility fixture: {box.stem}", f"mtllib {box.stem}.mtl", f"o {box.stem}"]
     sides = _box_sides(np.asarray(box.lo), np.asarray(box.hi))
@@ -86,6 +99,10 @@ def box_obj_text(box: _Box, nan_vertex: bool = False) -> str:
     if nan_vertex:
         lines[3] = "v nan 0 0"
     lines += ["vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1"]
+    if doubled:
+        faces = [f"f {4 * s + 1} {4 * s + 2} {4 * s + 3}" for s in range(len(sides))]
+        faces += [f"f {4 * s + 1} {4 * s + 3} {4 * s + 4}" for s in range(len(sides))]
+        lines += back_copies(faces)
     plain = []
     for s, (name, _) in enumerate(sides):
         v = 4 * s + 1
@@ -98,13 +115,15 @@ def box_obj_text(box: _Box, nan_vertex: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-def box_mtl_text(box: _Box) -> str:
-    """The MTL text of a box: ``material_0_0`` (textured when ``box.textured_front``) and ``material_1_0``."""
+def box_mtl_text(box: _Box, doubled: bool = False) -> str:
+    """The MTL text of a box: ``material_0_0`` (textured when ``box.textured_front``) and ``material_1_0``, and
+    with ``doubled`` the white ``material_back`` of the back copies."""
     kd = " ".join(f"{c:.4f}" for c in box.color)
     first = ["newmtl material_0_0", f"Kd {kd}"]
     if box.textured_front:
         first = ["newmtl material_0_0", "Kd 1 1 1", "map_Kd ../images/texture_0.png"]
-    return "\n".join([*first, "", "newmtl material_1_0", f"Kd {kd}", ""])
+    back = ["newmtl material_back", "Kd 1 1 1", ""] if doubled else []
+    return "\n".join([*first, "", "newmtl material_1_0", f"Kd {kd}", "", *back])
 
 
 def fixture_texture() -> np.ndarray:
@@ -207,6 +226,7 @@ def write_partnet_fixture(
     malformed_limit: bool = False,
     missing_obj: bool = False,
     nonfinite_vertex: bool = False,
+    doubled_faces: bool = False,
 ) -> Path:
     """Write the toy cabinet as a PartNet-Mobility object folder.
 
@@ -216,6 +236,7 @@ def write_partnet_fixture(
         malformed_limit: write the drawer's lower limit as ``-z0.008`` (read as -0.008 with a warning).
         missing_obj: leave out ``textured_objs/original-7.obj`` (the drawer handle).
         nonfinite_vertex: write a ``nan`` vertex into ``textured_objs/original-1.obj``.
+        doubled_faces: write every face twice, the extra copy white and in the opposite winding (real files do).
 
     Returns:
         ``dest``, holding ``mobility.urdf``, ``result.json``, ``meta.json``, ``textured_objs/*.obj|mtl`` and
@@ -228,9 +249,9 @@ def write_partnet_fixture(
     for box in _BOXES:
         if missing_obj and box.stem == "original-7":
             continue
-        obj = box_obj_text(box, nan_vertex=nonfinite_vertex and box.stem == "original-1")
+        obj = box_obj_text(box, nan_vertex=nonfinite_vertex and box.stem == "original-1", doubled=doubled_faces)
         (dest / "textured_objs" / f"{box.stem}.obj").write_text(obj)
-        (dest / "textured_objs" / f"{box.stem}.mtl").write_text(box_mtl_text(box))
+        (dest / "textured_objs" / f"{box.stem}.mtl").write_text(box_mtl_text(box, doubled_faces))
     (dest / "mobility.urdf").write_text(urdf_text(malformed_limit))
     (dest / "result.json").write_text(json.dumps(result_tree(), indent=1))
     meta = {"model_id": "affnerf-fixture", "anno_id": dest.name, "version": "3", "model_cat": model_cat}

@@ -27,6 +27,7 @@ from affnerf.data.partnet.kinematics import (
 )
 from affnerf.data.partnet.mapping import category_mapping, leaf_affordance, load_mapping
 from affnerf.data.partnet.objfile import ObjMesh, read_obj
+from affnerf.data.partnet.twosided import drop_back_copies
 from affnerf.data.partnet.urdf import Urdf, parse_urdf
 from affnerf.errors import input_error
 from affnerf.objects.asset import JointState, Material, ObjectAsset, Part, canonicalize
@@ -78,7 +79,8 @@ def obj_owners(leaves: list[Leaf], result_path: Path) -> dict[str, Leaf]:
 def place_visuals(
     src: Path, urdf: Urdf, poses: dict[str, np.ndarray], owner: dict[str, Leaf]
 ) -> dict[int, list[Piece]]:
-    """Read every visual's OBJ and pose it, grouped by the leaf that lists it.
+    """Read every visual's OBJ (one face of each doubled pair kept, see :mod:`.twosided`) and pose it, grouped by
+    the leaf that lists it.
 
     Args:
         src: the object folder (visual file names are relative to it).
@@ -105,7 +107,7 @@ def place_visuals(
                 )
                 continue
             if path not in meshes:
-                meshes[path] = read_obj(path, textures)
+                meshes[path] = drop_back_copies(read_obj(path, textures))
             pose = poses[link.name] @ visual.origin @ np.diag([*visual.scale, 1.0])
             out.setdefault(leaf.id, []).append(Piece(meshes[path], pose, link.name))
     return out
