@@ -30,7 +30,7 @@ for held in teapot scissors; do
 done
 
 # 3. the shipped model
-.venv/bin/python -m affnerf.predict.shipped "$W/affnerf" src/affnerf/models/affnerf-small.pt
+.venv/bin/python -m affnerf.predict.shipped "$W/affnerf" src/affnerf/weights/affnerf-small.pt
 
 # 4. Table 2 on held-out instances (test split: 16 objects), 1 input view, 20 target views at quarter resolution
 E="$W/eval-test"

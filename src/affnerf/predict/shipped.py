@@ -29,7 +29,7 @@ def shipped_model() -> Path:
     Raises:
         AffnerfError: when this installation has none (then pass ``--run``).
     """
-    path = Path(str(resources.files("affnerf.models").joinpath(SHIPPED_NAME)))
+    path = Path(str(resources.files("affnerf.weights").joinpath(SHIPPED_NAME)))
     if not path.is_file():
         raise AffnerfError(f"no --run given and no shipped model at {path}; train one with `affnerf train`")
     return path

@@ -1,1 +1,0 @@
-"""Trained checkpoints shipped with the package (see MODEL_CARD.md at the repository root)."""

@@ -1,0 +1,1 @@
+"""Trained weights shipped with the package (see MODEL_CARD.md at the repository root); code lives in ``affnerf.model``."""
