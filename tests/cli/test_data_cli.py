@@ -113,7 +113,8 @@ def test_a_model_cat_without_mapping_says_how_to_give_one_and_the_help_example_w
     assert main(args) == 2
     line = _error_line(capsys)
     assert "meta.json: model_cat 'Mug' has no mapping (known: Bottle," in line
-    assert line.endswith("give one with --mapping FILE (a minimal file is shown by 'affnerf data import-partnet --help')")
+    assert line.endswith("give one with --mapping FILE (a minimal file is shown by 'affnerf data import-partnet "
+                         "--help')")  # fmt: skip
     help_text = _help_text(capsys, "data", "import-partnet")
     assert ", ".join(AFFORDANCE_CLASSES[1:]) in " ".join(help_text.split())
     example = tmp_path / "mapping.yaml"

@@ -25,7 +25,7 @@ from affnerf.data.partnet.kinematics import (
     joint_values,
     link_poses,
 )
-from affnerf.data.partnet.mapping import category_mapping, leaf_affordance, load_mapping
+from affnerf.data.partnet.mapping import CategoryMapping, category_mapping, leaf_affordance, load_mapping
 from affnerf.data.partnet.objfile import ObjMesh, read_obj
 from affnerf.data.partnet.twosided import drop_back_copies
 from affnerf.data.partnet.urdf import Urdf, parse_urdf
@@ -211,33 +211,14 @@ def load_partnet_object(
     src = Path(src)
     if not src.is_dir():
         raise input_error(src, "not a folder")
-    meta_path, result_path = src / "meta.json", src / "result.json"
-    model_cat = read_model_cat(meta_path)
-    entry = category_mapping(load_mapping(mapping), model_cat, meta_path)
-    leaves = read_leaves(result_path)
+    model_cat = read_model_cat(src / "meta.json")
+    entry = category_mapping(load_mapping(mapping), model_cat, src / "meta.json")
+    leaves = read_leaves(src / "result.json")
     urdf = parse_urdf(src / "mobility.urdf")
     values = joint_values(urdf, joint_state, rng)
-    yaw = trimesh.transformations.rotation_matrix(np.radians(entry.yaw_deg), [0.0, 0.0, 1.0])
-    poses = {name: yaw @ pose for name, pose in link_poses(urdf, values).items()}
-    pieces = place_visuals(src, urdf, poses, obj_owners(leaves, result_path))
-    with_geometry = [leaf for leaf in leaves if leaf.id in pieces]
-    for leaf in leaves:
-        if leaf.id not in pieces:
-            logger.warning(
-                "%s: leaf %d (%s) has no geometry in %s; skipped", result_path, leaf.id, leaf.name, urdf.path.name
-            )
-    names = part_names(with_geometry)
-    parts = [
-        build_part(
-            names[leaf.id],
-            leaf_affordance(leaf, entry, result_path, names[leaf.id], strict),
-            pieces[leaf.id],
-        )
-        for leaf in with_geometry
-    ]
-    if not parts:
-        raise input_error(src, "no part geometry (no URDF visual is listed in result.json)")
-    part_links = {names[leaf.id]: {p.link for p in pieces[leaf.id]} for leaf in with_geometry}
+    poses = turned_link_poses(urdf, values, entry.yaw_deg)
+    pieces = place_visuals(src, urdf, poses, obj_owners(leaves, src / "result.json"))
+    parts, part_links = build_parts(src, leaves, pieces, entry, strict)
     asset = ObjectAsset(
         category=entry.category,
         parts=parts,
@@ -246,3 +227,46 @@ def load_partnet_object(
         source=SOURCE,
     )
     return canonicalize(asset)
+
+
+def turned_link_poses(urdf: Urdf, values: dict[str, float], yaw_deg: float) -> dict[str, np.ndarray]:
+    """(4, 4) world pose of every link for the joint ``values``, turned by ``yaw_deg`` about +z (the category's
+    front onto the canonical front)."""
+    yaw = trimesh.transformations.rotation_matrix(np.radians(yaw_deg), [0.0, 0.0, 1.0])
+    return {name: yaw @ pose for name, pose in link_poses(urdf, values).items()}
+
+
+def leaves_with_geometry(
+    leaves: list[Leaf], pieces: dict[int, list[Piece]], result_path: Path, urdf_name: str
+) -> list[Leaf]:
+    """The leaves that have placed pieces, in order; each other leaf is skipped with a warning."""
+    for leaf in leaves:
+        if leaf.id not in pieces:
+            logger.warning(
+                "%s: leaf %d (%s) has no geometry in %s; skipped", result_path, leaf.id, leaf.name, urdf_name
+            )
+    return [leaf for leaf in leaves if leaf.id in pieces]
+
+
+def build_parts(
+    src: Path, leaves: list[Leaf], pieces: dict[int, list[Piece]], entry: CategoryMapping, strict: bool
+) -> tuple[list[Part], dict[str, set[str]]]:
+    """One part per leaf with geometry, named by :func:`part_names`, its affordance from the mapping.
+
+    Returns:
+        The parts, and ``{part name: links its pieces hang on}`` (for :func:`joint_states`).
+
+    Raises:
+        AffnerfError: naming ``src`` when no leaf has geometry; naming ``result.json`` for an unmapped leaf with
+            ``strict``.
+    """
+    result_path = src / "result.json"
+    with_geometry = leaves_with_geometry(leaves, pieces, result_path, "mobility.urdf")
+    names = part_names(with_geometry)
+    parts = [
+        build_part(names[leaf.id], leaf_affordance(leaf, entry, result_path, names[leaf.id], strict), pieces[leaf.id])
+        for leaf in with_geometry
+    ]
+    if not parts:
+        raise input_error(src, "no part geometry (no URDF visual is listed in result.json)")
+    return parts, {names[leaf.id]: {p.link for p in pieces[leaf.id]} for leaf in with_geometry}

@@ -67,7 +67,8 @@ def opposite_pairs(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     n = len(faces)
     ids = position_ids(vertices)[faces]
     proper = (ids[:, 0] != ids[:, 1]) & (ids[:, 1] != ids[:, 2]) & (ids[:, 0] != ids[:, 2])
-    _, keys = np.unique(np.concatenate([canonical_cycles(ids), canonical_cycles(ids[:, ::-1])]), axis=0, return_inverse=True)
+    cycles = np.concatenate([canonical_cycles(ids), canonical_cycles(ids[:, ::-1])])  # (2F, 3): as wound, reversed
+    _, keys = np.unique(cycles, axis=0, return_inverse=True)
     forward, backward = keys.reshape(-1)[:n], keys.reshape(-1)[n:]
     first = np.full(keys.max() + 1, n)
     np.minimum.at(first, forward[proper], np.flatnonzero(proper))
