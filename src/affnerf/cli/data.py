@@ -79,7 +79,7 @@ def preview(root: Positional[Path], out: Path, objects: int = 8, views: int = 3,
         views: views per object.
         split: only objects of this split.
     """
-    from affnerf.data.preview import write_preview
+    from affnerf.pictures.sheets import write_preview
 
     print(write_preview(root, out, objects=objects, views=views, split=split))
 

@@ -143,3 +143,18 @@ class Dataset:
         if data.record.category != entry.category:
             raise input_error(folder / "transforms.json", f"category {data.record.category!r}, dataset.json says {entry.category!r}")
         return data
+
+
+def interleave_categories(entries: list[IndexEntry], per_category: int = 0) -> list[IndexEntry]:
+    """Entries taken round-robin over their categories (sorted by name), at most ``per_category`` of each (0: all),
+    so that the first few span the categories (figures, contact sheets, capped evaluations)."""
+    by_category: dict[str, list[IndexEntry]] = {}
+    for entry in entries:
+        group = by_category.setdefault(entry.category, [])
+        if not per_category or len(group) < per_category:
+            group.append(entry)
+    queues = [by_category[name] for name in sorted(by_category)]
+    ordered = []
+    for rank in range(max((len(q) for q in queues), default=0)):
+        ordered += [q[rank] for q in queues if rank < len(q)]
+    return ordered

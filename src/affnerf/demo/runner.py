@@ -13,7 +13,8 @@ from typing import Any
 from PIL import Image
 from tqdm import tqdm
 
-from affnerf.demo.pictures import mesh_preview, overview_sheet
+from affnerf.pictures.meshes import mesh_preview
+from affnerf.pictures.sheets import overview_sheet
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.viz import grid, overlay_affordance, stack_rows, text_strip
+from affnerf.pictures.compose import grid, overlay_affordance, stack_rows, text_strip
 
 #: Rows of the main table, in the paper's order.
 MAIN_METRICS = ("mIoU", "PA", "MPA")

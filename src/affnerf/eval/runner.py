@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 from PIL import Image
 
-from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
 from affnerf.data.format import write_json_atomic
 from affnerf.errors import AffnerfError
 import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
@@ -72,16 +72,7 @@ def _objects(ds: Dataset, config: EvalConfig) -> list[ObjectData]:
     entries = ds.objects(None if config.split == "all" else config.split, config.categories)
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no objects in split {config.split!r}")
-    by_cat: dict[str, list] = {}
-    for e in entries:
-        if not config.max_objects or len(by_cat.get(e.category, [])) < config.max_objects:
-            by_cat.setdefault(e.category, []).append(e)
-    ordered = []  # round-robin by category, so the figure's first objects span the categories
-    while any(by_cat.values()):
-        for cat in sorted(by_cat):
-            if by_cat[cat]:
-                ordered.append(by_cat[cat].pop(0))
-    objects = [ds.load_object(e) for e in ordered]
+    objects = [ds.load_object(e) for e in interleave_categories(entries, config.max_objects)]
     needed = config.input_views + config.target_views
     short = [o.record.object_id for o in objects if len(o) < needed]
     if short:

@@ -10,15 +10,13 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.data.format import check_pose, write_json_atomic
 from affnerf.fileio import read_json_file
-from affnerf.data.render import Renderer
 from affnerf.errors import input_error
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import Grasp
-from affnerf.objects.asset import Material, SurfaceMesh
+from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
 from affnerf.vocab import colorize_labels
 
 FORMAT = "affnerf-grasps-1"
@@ -94,36 +92,19 @@ def export_scene(path: Path, obj: GraspObject, grasps: list[Grasp], gripper: Par
 
 
 def render_grasps(obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 3, size: int = 320) -> np.ndarray:
-    """(size, 3 * size, 3) uint8 pictures of the object with the ``count`` best grasps, from three sides."""
-    vertices, faces, face_material, materials = [obj.vertices], [obj.faces], [], []
+    """(size, 3 * size, 3) uint8 pictures of the object (coloured by affordance) with the ``count`` best grasps
+    (the best green, the others orange), from three sides."""
     labels = obj.face_affordance if obj.face_affordance is not None else np.zeros(len(obj.faces), np.int64)
-    colors = colorize_labels(labels) / 255.0 * 0.6 + 0.35
-    uniq, inverse = np.unique(np.round(colors, 3), axis=0, return_inverse=True)
-    materials += [Material(tuple(c)) for c in uniq]
-    face_material.append(inverse.reshape(-1))
+    vertices, faces, colors = [obj.vertices], [obj.faces], [affordance_colors(labels, 0.6, 0.35)]
     offset = len(obj.vertices)
     for rank, mesh in enumerate(gripper_meshes(grasps[:count], gripper)):
         vertices.append(mesh.vertices)
         faces.append(mesh.faces + offset)
+        colors.append(np.tile(_BEST if rank == 0 else _OTHER, (len(mesh.faces), 1)))
         offset += len(mesh.vertices)
-        face_material.append(np.full(len(mesh.faces), len(materials)))
-        materials.append(Material(_BEST if rank == 0 else _OTHER))
-    f = np.concatenate(faces)
-    surface = SurfaceMesh(
-        vertices=np.concatenate(vertices), faces=f, face_part=np.ones(len(f), np.uint8),
-        face_affordance=np.zeros(len(f), np.uint8), face_material=np.concatenate(face_material).astype(np.int32),
-        face_uv=np.zeros((len(f), 3, 2), np.float32), materials=materials,
-    )  # fmt: skip
-    renderer = Renderer(surface)
-    intr = Intrinsics.from_fov(size, size, np.radians(50))
-    centre = obj.vertices.mean(0)
-    reach = np.ptp(obj.vertices, axis=0).max() * 1.6 + 0.1
-    views = []
-    for yaw in (-90.0, 0.0, 60.0):
-        a = np.radians(yaw)
-        eye = centre + reach * np.array([np.cos(a) * 0.8, np.sin(a) * 0.8, 0.6])
-        views.append(renderer.render(intr, look_at(eye, centre)).rgb)
-    return np.concatenate(views, axis=1)
+    surface = coloured_surface(np.concatenate(vertices), np.concatenate(faces), np.concatenate(colors))
+    reach = float(np.ptp(obj.vertices, axis=0).max()) * 1.6 + 0.1
+    return views_around(surface, obj.vertices.mean(0), reach, (-90.0, 0.0, 60.0), size, lift=0.6)
 
 
 def save_png(path: Path, image: np.ndarray) -> None:

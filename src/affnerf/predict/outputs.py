@@ -25,7 +25,7 @@ from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
-from affnerf.viz import overlay_affordance
+from affnerf.pictures.compose import overlay_affordance
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from affnerf.model.base import ConditionedNeRF
 from affnerf.model.inputs import dataset_views
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import render_view
-from affnerf.viz import depth_to_color, overlay_affordance
+from affnerf.pictures.compose import depth_to_color, overlay_affordance
 
 
 @dataclass

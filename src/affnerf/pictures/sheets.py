@@ -1,15 +1,25 @@
-"""A contact sheet of a dataset: for several objects and views, RGB | depth | affordance overlay, with a legend."""
+"""Contact sheets: a dataset's objects and views (RGB | depth | affordance overlay, with a legend), and the demo's
+overview of prediction folders (input | novel view | labelled mesh | grasps)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-from affnerf.data.dataset import Dataset
+from affnerf.data.dataset import Dataset, interleave_categories
 from affnerf.errors import AffnerfError
-from affnerf.viz import depth_to_color, grid, legend, overlay_affordance, stack_rows, text_strip
+from affnerf.pictures.compose import (
+    depth_to_color,
+    fit_height,
+    grid,
+    legend,
+    overlay_affordance,
+    stack_rows,
+    text_strip,
+)
 
 
 def preview_sheet(
@@ -23,7 +33,7 @@ def preview_sheet(
 
     Args:
         root: dataset root.
-        objects: how many objects (spread over categories: round-robin by category).
+        objects: how many objects (spread over categories: round-robin by category, categories by name).
         views: views per object (evenly spaced through its frames).
         split: only objects of this split, if given.
         tile_width: width of each image tile in pixels.
@@ -35,14 +45,7 @@ def preview_sheet(
     entries = ds.objects(split=split)
     if not entries:
         raise AffnerfError(f"{Path(root) / 'dataset.json'}: no objects{f' in split {split}' if split else ''}")
-    by_category: dict[str, list] = {}
-    for e in entries:
-        by_category.setdefault(e.category, []).append(e)
-    chosen = []
-    while len(chosen) < objects and any(by_category.values()):
-        for cat in list(by_category):
-            if by_category[cat] and len(chosen) < objects:
-                chosen.append(by_category[cat].pop(0))
+    chosen = interleave_categories(entries)[:objects]
     rows, present = [], set()
     for entry in chosen:
         obj = ds.load_object(entry)
@@ -66,3 +69,23 @@ def write_preview(root: Path, out: Path, **kwargs: int | str | None) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(preview_sheet(root, **kwargs)).save(out)  # type: ignore[arg-type]
     return out
+
+
+def overview_sheet(folders: Sequence[Path], height: int = 150) -> np.ndarray | None:
+    """(H, W, 3) uint8: one row per demo example folder, input | a novel view (RGB | affordance) | the labelled
+    mesh | the best grasps; folders without a mesh are left out (None when none has one)."""
+    rows = []
+    for folder in folders:
+        folder = Path(folder)
+        original = next(iter(sorted(folder.glob("original.*"))), None)
+        turntable = sorted((folder / "turntable").glob("*.png"))
+        if original is None or not turntable or not (folder / "mesh_preview.png").is_file():
+            continue
+        row = [fit_height(np.asarray(Image.open(p)), height) for p in (original, turntable[len(turntable) // 6], folder / "mesh_preview.png")]
+        if (folder / "grasps" / "grasps.png").is_file():
+            row.append(fit_height(np.asarray(Image.open(folder / "grasps" / "grasps.png")), height))
+        rows.append(np.concatenate([np.pad(im, ((0, 0), (0, 4), (0, 0)), constant_values=255) for im in row], axis=1))
+    if not rows:
+        return None
+    header = text_strip("input   |   novel view: colour | affordance   |   labelled mesh   |   grasps", rows[0].shape[1])
+    return stack_rows([header, *[np.pad(r, ((0, 4), (0, 0), (0, 0)), constant_values=255) for r in rows]])

@@ -1,4 +1,4 @@
-"""Pictures for people: depth colouring, affordance overlays, legends and image grids (uint8 RGB arrays)."""
+"""Composing pictures from arrays: depth colouring, affordance overlays, text, legends, grids (uint8 RGB)."""
 
 from __future__ import annotations
 
@@ -109,3 +109,9 @@ def stack_rows(parts: Sequence[np.ndarray], fill: int = 255) -> np.ndarray:
         for p in parts
     ]
     return np.concatenate(padded, 0)
+
+
+def fit_height(image: np.ndarray, height: int) -> np.ndarray:
+    """Resize (keeping the aspect ratio) to ``height`` rows."""
+    width = max(1, round(image.shape[1] * height / image.shape[0]))
+    return np.asarray(Image.fromarray(image).convert("RGB").resize((width, height), Image.LANCZOS))
