@@ -7,7 +7,7 @@ import pytest
 
 from affnerf.data.cameras import Intrinsics, project, unproject_depth
 from affnerf.data.generate import camera_poses
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.objects.asset import merge_parts
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed
 
@@ -40,10 +40,10 @@ def _matches_nearby(labels: np.ndarray, u: np.ndarray, v: np.ndarray, expected: 
 @pytest.mark.parametrize("category", CATEGORY_NAMES)
 def test_points_reprojected_between_views_keep_depth_and_labels(category):
     asset = make_object(category, object_seed(5, category, 0))
-    renderer = Renderer(merge_parts(asset))
+    caster = FrameCaster(merge_parts(asset))
     intr = Intrinsics.from_fov(240, 180, np.radians(60))
     poses = camera_poses(5, category, 0, 8)
-    frames = [renderer.render(intr, p) for p in poses]
+    frames = [caster.cast_frame(intr, p) for p in poses]
     eyes = poses[:, :3, 3] / np.linalg.norm(poses[:, :3, 3], axis=1, keepdims=True)
     checked = 0
     for a in range(len(poses)):
@@ -57,7 +57,7 @@ def test_points_reprojected_between_views_keep_depth_and_labels(category):
         # visible in B: the ray from B's camera towards the point first meets the surface at the point
         origin = poses[b][:3, 3]
         to_point = points[inside] - origin
-        ray, _, t, _ = renderer.cast(np.broadcast_to(origin, to_point.shape), to_point)
+        ray, _, t, _ = caster.cast(np.broadcast_to(origin, to_point.shape), to_point)
         hit_t = np.full(len(to_point), np.inf)
         hit_t[ray] = t
         visible = np.abs(hit_t - 1.0) * np.linalg.norm(to_point, axis=1) < 2e-4

@@ -12,7 +12,7 @@ from affnerf.data.cameras import Intrinsics
 from affnerf.data.dataset import Dataset
 from affnerf.data.format import FORMAT, check_pose, read_index, read_transforms
 from affnerf.data.generate import camera_poses
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.errors import AffnerfError
 from affnerf.meshio import read_labelled_ply
 from affnerf.objects.asset import merge_parts
@@ -20,7 +20,7 @@ from affnerf.objects.registry import make_object, object_seed
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 
-def test_reader_returns_what_the_renderer_produced(tiny_dataset):
+def test_reader_returns_what_the_ray_caster_produced(tiny_dataset):
     ds = Dataset.open(tiny_dataset)
     entry = ds.objects(categories=["pen"])[1]
     obj = ds.load_object(entry)
@@ -28,9 +28,9 @@ def test_reader_returns_what_the_renderer_produced(tiny_dataset):
     asset = make_object("pen", object_seed(3, "pen", index).spawn(2)[0])
     poses = camera_poses(3, "pen", index, 5)
     intr = Intrinsics.from_fov(64, 48, obj.record.intrinsics.camera_angle_x)
-    renderer = Renderer(merge_parts(asset))
+    caster = FrameCaster(merge_parts(asset))
     for i in range(len(obj)):
-        expected = renderer.render(intr, poses[i])
+        expected = caster.cast_frame(intr, poses[i])
         np.testing.assert_array_equal(obj.pose(i), poses[i])
         np.testing.assert_array_equal(obj.rgb(i), expected.rgb)
         np.testing.assert_array_equal(obj.affordance(i), expected.affordance)

@@ -18,7 +18,7 @@ import numpy as np
 
 from affnerf.data.format import DatasetIndex, IndexEntry, ObjectRecord, read_index, read_transforms
 from affnerf.data.images import read_depth, read_labels, read_rgb
-from affnerf.data.render import Frame
+from affnerf.data.raycast import Frame
 from affnerf.errors import input_error
 
 

@@ -121,7 +121,7 @@ def write_object(
     Returns:
         The object folder.
     """
-    from affnerf.data.render import Renderer  # loaded late: see affnerf.data.pool on the ray caster's threads
+    from affnerf.data.raycast import FrameCaster  # loaded late: see affnerf.data.pool on the ray caster's threads
 
     root = Path(root)
     final = root / entry.path
@@ -131,11 +131,11 @@ def write_object(
         for folder in MAP_FOLDERS:
             (tmp / folder).mkdir(parents=True)
         surface = merge_parts(asset)
-        renderer = Renderer(surface, background)
+        caster = FrameCaster(surface, background)
         digits = max(3, len(str(len(poses) - 1)))
         frames = []
         for i, pose in enumerate(poses):
-            frame = renderer.render(intrinsics, pose)
+            frame = caster.cast_frame(intrinsics, pose)
             paths = frame_paths(i, digits)
             write_rgb(tmp / paths[0], frame.rgb)
             write_depth(tmp / paths[1], frame.depth, DEPTH_UNIT)

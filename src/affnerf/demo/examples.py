@@ -11,7 +11,7 @@ from PIL import Image
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics, look_at
 from affnerf.data.generate import instance_splits
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.objects.asset import ObjectAsset, merge_parts
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed
 
@@ -28,7 +28,7 @@ def held_out_index(seed: int, category: str, objects_per_category: int) -> int:
 def render_example(asset: ObjectAsset, width: int = 400, height: int = 300) -> np.ndarray:
     """(H, W, 3) uint8 picture of an object on white from the example camera."""
     intr = Intrinsics.from_fov(width, height, DEFAULT_CAMERA_ANGLE_X)
-    return Renderer(merge_parts(asset)).render(intr, look_at(EXAMPLE_EYE, np.zeros(3))).rgb
+    return FrameCaster(merge_parts(asset)).cast_frame(intr, look_at(EXAMPLE_EYE, np.zeros(3))).rgb
 
 
 def write_examples(out: Path, seed: int = 0, objects_per_category: int = 20) -> list[Path]:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.data.render import RayCaster
+from affnerf.data.raycast import RayCaster
 from affnerf.errors import input_error
 from affnerf.grasp.quality import object_radius
 from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels, read_labelled_ply

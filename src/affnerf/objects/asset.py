@@ -1,7 +1,7 @@
 """Part-annotated objects: parts with meshes, affordances and materials, in the canonical frame (GUIDE 1, 3).
 
 An :class:`ObjectAsset` is what every object source produces (the procedural families and the PartNet-Mobility
-importer) and what the renderer and dataset writer consume. Part ids are 1-based positions in ``parts``
+importer) and what the ray caster and dataset writer consume. Part ids are 1-based positions in ``parts``
 (0 is background in every label map).
 """
 
@@ -185,7 +185,7 @@ def canonicalize(asset: ObjectAsset, extent: float = NORMALISED_EXTENT) -> Objec
 
 @dataclass
 class SurfaceMesh:
-    """All parts of an object merged into one triangle soup with per-face attributes (what the renderer reads).
+    """All parts of an object merged into one triangle soup with per-face attributes (what the ray caster reads).
 
     Attributes:
         vertices: (V, 3) float64 positions.

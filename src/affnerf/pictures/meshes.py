@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from affnerf.data.cameras import Intrinsics, look_at
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.meshio import LabelledMesh, majority_face_labels
 from affnerf.objects.asset import Material, SurfaceMesh
 from affnerf.vocab import AFFORDANCE_PALETTE
@@ -42,13 +42,13 @@ def views_around(
 ) -> np.ndarray:
     """(size, len(yaws) * size, 3) uint8: the surface seen from cameras at ``reach`` from ``centre``, one per yaw
     (degrees about +z), each raised by ``lift`` times the reach and looking at the centre, side by side."""
-    renderer = Renderer(surface)
+    caster = FrameCaster(surface)
     intr = Intrinsics.from_fov(size, size, np.radians(50))
     views = []
     for yaw in yaws:
         a = np.radians(yaw)
         eye = centre + reach * np.array([np.cos(a) * 0.8, np.sin(a) * 0.8, lift])
-        views.append(renderer.render(intr, look_at(eye, centre)).rgb)
+        views.append(caster.cast_frame(intr, look_at(eye, centre)).rgb)
     return np.concatenate(views, axis=1)
 
 

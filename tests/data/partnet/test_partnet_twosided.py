@@ -11,17 +11,17 @@ from affnerf.data.cameras import Intrinsics
 from affnerf.data.partnet import load_partnet_object, write_partnet_fixture
 from affnerf.data.partnet.objfile import read_obj
 from affnerf.data.partnet.twosided import drop_back_copies, face_normals, opposite_pairs
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.objects.asset import ObjectAsset, merge_parts
 from affnerf.predict.predictor import turntable_poses
 
 
 def _views(asset: ObjectAsset) -> list[np.ndarray]:
     """(H, W, 3) uint8 views of the asset from four sides and from above."""
-    renderer = Renderer(merge_parts(asset))
+    caster = FrameCaster(merge_parts(asset))
     intr = Intrinsics.from_fov(96, 72, 0.9)
     poses = [*turntable_poses(4, 20.0, 1.0), *turntable_poses(1, 70.0, 1.0)]
-    return [renderer.render(intr, pose).rgb for pose in poses]
+    return [caster.cast_frame(intr, pose).rgb for pose in poses]
 
 
 def _whitish(rgb: np.ndarray) -> float:

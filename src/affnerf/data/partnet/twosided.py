@@ -11,7 +11,7 @@ face of each pair, the one facing out of the mesh, decided by the first of these
 2. texture: on an open sheet (both counts even, or both odd) the textured copy, when only one is textured;
 3. centre: the copy facing away from the mean of the mesh's vertices (the first in the file when neither does).
 
-The renderer shades both sides of a face alike (``|cos|``), so the kept face looks the same from either side.
+The ray caster shades both sides of a face alike (``|cos|``), so the kept face looks the same from either side.
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def surface_crossings(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarr
     Hits at one place (coincident faces, a shared edge) count once. A ray still hitting after ``MAX_CROSSINGS``
     gets -1.
     """
-    from affnerf.data.render import RayCaster  # loaded late: Embree sizes its threads on import (affnerf.data.pool)
+    from affnerf.data.raycast import RayCaster  # loaded late: Embree sizes its threads on import (affnerf.data.pool)
 
     caster = RayCaster(vertices, faces)
     step = RAY_STEP * max(float(np.ptp(vertices, axis=0).max()), 1e-9)

@@ -12,7 +12,7 @@ import torch
 
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.format import IndexEntry
-from affnerf.data.render import Renderer
+from affnerf.data.raycast import FrameCaster
 from affnerf.data.writer import surface_from_record
 from affnerf.errors import input_error
 from affnerf.eval.protocol import Prediction, TargetSet
@@ -79,7 +79,7 @@ class RetrievalMethod:
         self.views_per_object = views_per_object
         self.entries: list[IndexEntry] = bank_entries(dataset, categories)
         self.bank = np.stack([self._embed(dataset.load_object(e), None) for e in self.entries])
-        self._renderers: dict[str, Renderer] = {}
+        self._casters: dict[str, FrameCaster] = {}
 
     @torch.no_grad()
     def _embed(self, obj: ObjectData, views: list[int] | None) -> np.ndarray:
@@ -97,11 +97,11 @@ class RetrievalMethod:
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         entry = self.nearest(obj, inputs)
-        if entry.id not in self._renderers:
+        if entry.id not in self._casters:
             mesh = read_labelled_ply(self.dataset.root / entry.path / "mesh.ply")
-            self._renderers[entry.id] = Renderer(surface_from_record(mesh), targets.background)
-        renderer = self._renderers[entry.id]
-        frames = [renderer.render(targets.intrinsics, pose) for pose in targets.poses]
+            self._casters[entry.id] = FrameCaster(surface_from_record(mesh), targets.background)
+        caster = self._casters[entry.id]
+        frames = [caster.cast_frame(targets.intrinsics, pose) for pose in targets.poses]
         return Prediction(np.stack([f.affordance for f in frames]), np.stack([f.rgb / 255.0 for f in frames]))
 
 

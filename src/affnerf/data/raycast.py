@@ -1,4 +1,7 @@
-"""Ray-cast rendering of part-annotated objects with trimesh + embreex.
+"""Ray casting of part-annotated meshes into dataset frames (colour, z-depth, affordance, part), with embreex.
+
+The word for this in affnerf is *ray-cast*: *render* means volume rendering of a radiance field
+(:mod:`affnerf.rendering`, :func:`affnerf.model.views.render_view`).
 
 One ray per pixel through its centre (GUIDE 1), so colour, z-depth, affordance and part maps agree pixel for
 pixel. Shading is ambient plus a light at the camera, on smooth normals that keep creases sharp; the albedo comes
@@ -174,15 +177,15 @@ class RayCaster:
         return ray, out["primID"][ray].astype(np.int64), out["tfar"][ray].astype(np.float64), bary
 
 
-class Renderer:
-    """Renders one object from any camera.
+class FrameCaster:
+    """Ray-casts one object's frames from any camera: colour, z-depth, affordance and part maps.
 
     Example:
         >>> from affnerf.objects.registry import make_object
         >>> from affnerf.objects.asset import merge_parts
         >>> from affnerf.data.cameras import Intrinsics, look_at
-        >>> r = Renderer(merge_parts(make_object("screwdriver", 0)))
-        >>> f = r.render(Intrinsics.from_fov(40, 30, 1.0), look_at(np.array([0.0, -0.6, 0.3]), np.zeros(3)))
+        >>> r = FrameCaster(merge_parts(make_object("screwdriver", 0)))
+        >>> f = r.cast_frame(Intrinsics.from_fov(40, 30, 1.0), look_at(np.array([0.0, -0.6, 0.3]), np.zeros(3)))
         >>> f.rgb.shape, bool((f.part > 0).any())
         ((30, 40, 3), True)
     """
@@ -203,8 +206,8 @@ class Renderer:
         """First hits of rays on the object (see :meth:`RayCaster.cast`)."""
         return self.caster.cast(origins, dirs)
 
-    def render(self, intr: Intrinsics, c2w: np.ndarray) -> Frame:
-        """Render the four maps of one view from camera-to-world pose ``c2w`` (4, 4)."""
+    def cast_frame(self, intr: Intrinsics, c2w: np.ndarray) -> Frame:
+        """Ray-cast the four maps of one camera frame from camera-to-world pose ``c2w`` (4, 4)."""
         origins, dirs = world_rays(intr, c2w)
         # each direction has unit length along the camera's -z axis, so a hit's t is its z-depth
         ray, face, z, bary = self.cast(origins, dirs)

@@ -6,7 +6,7 @@ import numpy as np
 import trimesh
 
 from affnerf.data.cameras import Intrinsics, look_at, pixel_directions
-from affnerf.data.render import Renderer, sample_texture
+from affnerf.data.raycast import FrameCaster, sample_texture
 from affnerf.objects.asset import Material, ObjectAsset, Part, merge_parts
 from affnerf.objects.primitives import box, placed, translation
 
@@ -15,7 +15,7 @@ DOWN = look_at(np.array([0.0, 0.0, 1.0]), np.zeros(3), up=np.array([0.0, 1.0, 0.
 
 
 def _render(parts, c2w=DOWN, background=(1.0, 1.0, 1.0)):
-    return Renderer(merge_parts(ObjectAsset("toy", parts)), background).render(INTR, c2w)
+    return FrameCaster(merge_parts(ObjectAsset("toy", parts)), background).cast_frame(INTR, c2w)
 
 
 def test_sphere_depth_and_silhouette_match_the_analytic_sphere():
