@@ -21,6 +21,6 @@ def view(path: Positional[Path], port: int = 8080, host: str = "127.0.0.1", top_
         host: address to listen on; 127.0.0.1 serves this machine only, 0.0.0.0 every network interface.
         top_k: grasps shown at first, best first.
     """
-    from affnerf.view.viewer import serve
+    from affnerf.viewer.server import serve
 
     serve(path, host=host, port=port, block=True, top_k=top_k)

@@ -19,8 +19,8 @@ from affnerf.vocab import AFFORDANCE_PALETTE, colorize_labels
 
 viser = pytest.importorskip("viser")
 
-from affnerf.view import build_scene, serve  # noqa: E402
-from affnerf.view.headless import find_chromium, screenshot  # noqa: E402
+from affnerf.viewer import build_scene, serve  # noqa: E402
+from affnerf.viewer.headless import find_chromium, screenshot  # noqa: E402
 
 GRASP, CUT = 1, 2  # the two classes of the test object: top half grasp (red), bottom half cut (green)
 
@@ -126,7 +126,7 @@ def test_dataset_object_shows_frame_zero_camera(server, tiny_dataset: Path) -> N
     ],
 )
 def test_bad_input_names_the_path(tmp_path: Path, make, problem: str) -> None:
-    from affnerf.view import load_content
+    from affnerf.viewer import load_content
 
     path = make(tmp_path)
     with pytest.raises(AffnerfError, match=problem) as info:
@@ -135,7 +135,7 @@ def test_bad_input_names_the_path(tmp_path: Path, make, problem: str) -> None:
 
 
 def test_mesh_without_faces_is_an_error(tmp_path: Path) -> None:
-    from affnerf.view import load_content
+    from affnerf.viewer import load_content
 
     path = tmp_path / "points.ply"
     path.write_bytes(trimesh.PointCloud(np.random.default_rng(0).random((10, 3))).export(file_type="ply"))

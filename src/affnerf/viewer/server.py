@@ -18,8 +18,8 @@ import numpy as np
 import viser
 import viser.transforms as vtf
 
-from affnerf.view.loading import GraspModel, MeshPart, load_grasps, load_image, load_parts
-from affnerf.view.sources import InputCamera, ViewerSources, find_sources
+from affnerf.viewer.loading import GraspModel, MeshPart, load_grasps, load_image, load_parts
+from affnerf.viewer.sources import InputCamera, ViewerSources, find_sources
 
 #: Gripper colours, apart from the affordance palette: the best grasp dark and opaque, the others light and
 #: see-through.
@@ -68,7 +68,7 @@ class SceneHandles:
 
 
 def load_content(path: Path) -> ViewContent:
-    """Find and load what PATH shows (see :mod:`affnerf.view.sources`).
+    """Find and load what PATH shows (see :mod:`affnerf.viewer.sources`).
 
     Raises:
         AffnerfError: with one line naming the file at fault.

@@ -2,7 +2,7 @@
 
 PATH is a mesh file or a folder: a prediction folder (``affordance_model.ply``, ``input.png``), a dataset object
 folder (``mesh.ply``, ``transforms.json``) or a grasps folder (``grasps.json``, whose ``mesh`` entry or parent folder
-names the mesh). Nothing here draws; :mod:`affnerf.view.viewer` does.
+names the mesh). Nothing here draws; :mod:`affnerf.viewer.server` does.
 """
 
 from __future__ import annotations
