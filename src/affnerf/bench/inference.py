@@ -50,28 +50,12 @@ def measure_inference(
     device = loaded.device
     chunk = chunk or (POINTS_PER_CHUNK if device.type == "cuda" else RAYS_PER_CHUNK)
     fast = Predictor(loaded, chunk, fast=True)
-    cube = Predictor(loaded, chunk, fast=False)
     reference = _reference(loaded, chunk)
-    intr = Intrinsics.from_fov(size[0], size[1], DEFAULT_CAMERA_ANGLE_X)
-    pose = turntable_poses(8)[1]
-    codes = fast.encode_crops(crop[None])
     out: dict[str, Any] = {"size": list(size), "views": views, "mesh_resolution": resolution, "chunk": chunk}
     out["image_to_codes"] = timed(lambda: fast.encode_crops(crop[None]), repeats, device=device)
-
-    def fast_view() -> Any:
-        obj = EncodedObject(fast.encode_crops(crop[None]))
-        return fast.render(obj, intr, pose)
-
-    def reference_view() -> Any:
-        return reference.render(EncodedObject(reference.encode_crops(crop[None])), intr, pose)
-
-    out["image_to_view"] = {"fast": timed(fast_view, repeats, device=device),
-                            "reference": timed(reference_view, max(1, repeats // 2), warmup=0, device=device)}  # fmt: skip
-    out["image_to_view"]["speedup"] = out["image_to_view"]["reference"]["median"] / out["image_to_view"]["fast"]["median"]
-    a = fast_view()
-    b = cube.render(EncodedObject(cube.encode_crops(crop[None])), intr, pose)
-    out["image_to_view"]["fast_vs_coarse_to_fine_psnr"] = psnr(a.rgb, b.rgb)
-    out["image_to_view"]["label_agreement"] = float((a.labels == b.labels).mean())
+    intr = Intrinsics.from_fov(size[0], size[1], DEFAULT_CAMERA_ANGLE_X)
+    cube = Predictor(loaded, chunk, fast=False)
+    out["image_to_view"] = _view_latency(fast, reference, cube, crop, intr, repeats)
 
     def fast_views() -> None:
         obj = EncodedObject(fast.encode_crops(crop[None]))
@@ -79,17 +63,40 @@ def measure_inference(
             fast.render(obj, intr, p)
 
     out["image_to_views"] = {"fast": timed(fast_views, max(1, repeats // 2), warmup=0, device=device)}
+    out["image_to_mesh"] = _mesh_latency(fast, reference, crop, resolution, repeats)
+    return out
 
-    def fast_mesh() -> Any:
-        return fast.mesh(EncodedObject(fast.encode_crops(crop[None])), resolution)
 
-    def reference_mesh() -> Any:
-        return reference.mesh(EncodedObject(reference.encode_crops(crop[None])), resolution)
+def _fast_vs_reference(fast: Any, reference: Any, repeats: int, device: Any) -> dict[str, Any]:
+    """Timings of two callables (the reference repeated half as often, without warm-up) and the speed-up."""
+    out = {"fast": timed(fast, repeats, device=device),
+           "reference": timed(reference, max(1, repeats // 2), warmup=0, device=device)}  # fmt: skip
+    out["speedup"] = out["reference"]["median"] / out["fast"]["median"]
+    return out
 
-    out["image_to_mesh"] = {"fast": timed(fast_mesh, repeats, device=device),
-                            "reference": timed(reference_mesh, max(1, repeats // 2), warmup=0, device=device)}  # fmt: skip
-    out["image_to_mesh"]["speedup"] = out["image_to_mesh"]["reference"]["median"] / out["image_to_mesh"]["fast"]["median"]
-    m_fast, m_ref = fast_mesh(), reference_mesh()
-    out["image_to_mesh"]["faces"] = {"fast": int(len(m_fast.faces)), "reference": int(len(m_ref.faces))}
-    del codes
+
+def _view_latency(
+    fast: Predictor, reference: Predictor, cube: Predictor, crop: np.ndarray, intr: Intrinsics, repeats: int
+) -> dict[str, Any]:
+    """Image -> one view, fast vs reference, and how closely the fast view matches the coarse-to-fine one."""
+    pose = turntable_poses(8)[1]
+
+    def view(predictor: Predictor) -> Any:
+        return predictor.render(EncodedObject(predictor.encode_crops(crop[None])), intr, pose)
+
+    out = _fast_vs_reference(lambda: view(fast), lambda: view(reference), repeats, fast.loaded.device)
+    a, b = view(fast), view(cube)
+    out["fast_vs_coarse_to_fine_psnr"] = psnr(a.rgb, b.rgb)
+    out["label_agreement"] = float((a.labels == b.labels).mean())
+    return out
+
+
+def _mesh_latency(fast: Predictor, reference: Predictor, crop: np.ndarray, resolution: int, repeats: int) -> dict[str, Any]:
+    """Image -> labelled mesh, fast vs reference, and the faces each gives."""
+
+    def mesh(predictor: Predictor) -> Any:
+        return predictor.mesh(EncodedObject(predictor.encode_crops(crop[None])), resolution)
+
+    out = _fast_vs_reference(lambda: mesh(fast), lambda: mesh(reference), repeats, fast.loaded.device)
+    out["faces"] = {"fast": int(len(mesh(fast).faces)), "reference": int(len(mesh(reference).faces))}
     return out

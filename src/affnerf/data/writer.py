@@ -94,6 +94,79 @@ def frame_paths(index: int, digits: int) -> tuple[str, str, str, str]:
     return tuple(f"{folder}/{name}" for folder in MAP_FOLDERS)  # type: ignore[return-value]
 
 
+def _write_frames(
+    folder: Path,
+    surface: SurfaceMesh,
+    poses: np.ndarray,
+    intrinsics: Intrinsics,
+    background: tuple[float, float, float],
+    on_frame: Callable[[], None] | None,
+) -> list[FrameRecord]:
+    """Ray-cast every pose and write its four maps under ``folder``; returns the frames' records."""
+    from affnerf.data.raycast import FrameCaster  # loaded late: see affnerf.data.pool on the ray caster's threads
+
+    for sub in MAP_FOLDERS:
+        (folder / sub).mkdir(parents=True)
+    caster = FrameCaster(surface, background)
+    digits = max(3, len(str(len(poses) - 1)))
+    frames = []
+    for i, pose in enumerate(poses):
+        frame = caster.cast_frame(intrinsics, pose)
+        paths = frame_paths(i, digits)
+        write_rgb(folder / paths[0], frame.rgb)
+        write_depth(folder / paths[1], frame.depth, DEPTH_UNIT)
+        write_labels(folder / paths[2], frame.affordance)
+        write_labels(folder / paths[3], frame.part)
+        frames.append(FrameRecord(*paths, transform_matrix=np.asarray(pose)))
+        if on_frame is not None:
+            on_frame()
+    return frames
+
+
+def object_record(
+    entry: IndexEntry,
+    asset: ObjectAsset,
+    intrinsics: Intrinsics,
+    background: tuple[float, float, float],
+    frames: list[FrameRecord],
+    extra: dict[str, Any] | None = None,
+) -> ObjectRecord:
+    """The ``transforms.json`` content of an object: cameras, parts, frames, and its split, source, scale, joint
+    states and shape parameters (plus ``extra``)."""
+    return ObjectRecord(
+        object_id=entry.id,
+        category=entry.category,
+        intrinsics=intrinsics,
+        background_color=background,
+        depth_unit_scale_factor=DEPTH_UNIT,
+        affordance_classes=list(AFFORDANCE_CLASSES),
+        parts=[PartRecord(**p) for p in asset.part_table()],
+        frames=frames,
+        extra={
+            "split": entry.split,
+            "source": entry.source,
+            "scale": asset.scale,
+            "joints": [j.to_json() for j in asset.joints],
+            "params": asset.params,
+            **(extra or {}),
+        },
+    )
+
+
+def _move_into_place(root: Path, tmp: Path, final: Path, object_id: str, replace: bool) -> None:
+    """Put the finished folder ``tmp`` at ``final``: swap it in (``replace``), keep a complete copy already there
+    (another process finished first), or clear debris and rename."""
+    final.parent.mkdir(parents=True, exist_ok=True)
+    if is_complete(final) and replace:
+        swap_in(root, tmp, final, object_id)
+    elif is_complete(final):
+        shutil.rmtree(tmp)
+    else:
+        if final.exists():  # a folder without transforms.json is debris, never a finished object
+            shutil.rmtree(final)
+        os.rename(tmp, final)
+
+
 def write_object(
     root: Path,
     entry: IndexEntry,
@@ -105,7 +178,8 @@ def write_object(
     on_frame: Callable[[], None] | None = None,
     replace: bool = False,
 ) -> Path:
-    """Render ``asset`` from every pose and write its complete folder at ``root / entry.path``.
+    """Ray-cast ``asset`` from every pose and write its complete folder at ``root / entry.path``, all or nothing
+    (assembled under ``.partial/``, then renamed into place).
 
     Args:
         root: dataset root.
@@ -121,58 +195,17 @@ def write_object(
     Returns:
         The object folder.
     """
-    from affnerf.data.raycast import FrameCaster  # loaded late: see affnerf.data.pool on the ray caster's threads
-
     root = Path(root)
     final = root / entry.path
     clear_partial(root, entry.id)
     tmp = root / PARTIAL_DIR / f"{entry.id}.{os.getpid()}.{uuid.uuid4().hex[:8]}"
     try:
-        for folder in MAP_FOLDERS:
-            (tmp / folder).mkdir(parents=True)
         surface = merge_parts(asset)
-        caster = FrameCaster(surface, background)
-        digits = max(3, len(str(len(poses) - 1)))
-        frames = []
-        for i, pose in enumerate(poses):
-            frame = caster.cast_frame(intrinsics, pose)
-            paths = frame_paths(i, digits)
-            write_rgb(tmp / paths[0], frame.rgb)
-            write_depth(tmp / paths[1], frame.depth, DEPTH_UNIT)
-            write_labels(tmp / paths[2], frame.affordance)
-            write_labels(tmp / paths[3], frame.part)
-            frames.append(FrameRecord(*paths, transform_matrix=np.asarray(pose)))
-            if on_frame is not None:
-                on_frame()
+        frames = _write_frames(tmp, surface, poses, intrinsics, background, on_frame)
         write_labelled_ply(tmp / "mesh.ply", surface_mesh_record(surface))
-        record = ObjectRecord(
-            object_id=entry.id,
-            category=entry.category,
-            intrinsics=intrinsics,
-            background_color=background,
-            depth_unit_scale_factor=DEPTH_UNIT,
-            affordance_classes=list(AFFORDANCE_CLASSES),
-            parts=[PartRecord(**p) for p in asset.part_table()],
-            frames=frames,
-            extra={
-                "split": entry.split,
-                "source": entry.source,
-                "scale": asset.scale,
-                "joints": [j.to_json() for j in asset.joints],
-                "params": asset.params,
-                **(extra or {}),
-            },
-        )
+        record = object_record(entry, asset, intrinsics, background, frames, extra)
         write_json_atomic(tmp / "transforms.json", record.to_json())
-        final.parent.mkdir(parents=True, exist_ok=True)
-        if is_complete(final) and replace:
-            swap_in(root, tmp, final, entry.id)
-        elif is_complete(final):  # another process finished the same object first: keep its copy
-            shutil.rmtree(tmp)
-        else:
-            if final.exists():  # a folder without transforms.json is debris, never a finished object
-                shutil.rmtree(final)
-            os.rename(tmp, final)
+        _move_into_place(root, tmp, final, entry.id, replace)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
