@@ -1,4 +1,4 @@
-"""Files written atomically and JSON files read with one-line errors.
+"""Files written atomically, JSON written atomically from numpy-bearing data, and JSON read with one-line errors.
 
 A file written by :func:`atomic_write` appears under its final name only once completely written and synced; a
 crash or a failed write (full disk, read-only folder) leaves the previous file, if any, untouched.
@@ -12,6 +12,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
+
+import numpy as np
 
 from affnerf.errors import input_error
 
@@ -59,6 +61,34 @@ def read_json_file(path: Path) -> Any:
     if not path.is_file():
         raise input_error(path, "file not found")
     try:
-        return json.loads(path.read_text())
+        return json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise input_error(path, f"not valid JSON ({exc})") from None
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays, tuples and paths turned into plain JSON types, recursively."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        return float(value)
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def write_json_atomic(path: Path, data: Any) -> None:
+    """Write JSON to ``path`` through a temporary file in the same folder and a rename.
+
+    A crash or a failed write leaves the previous file untouched.
+    """
+    text = json.dumps(jsonable(data), indent=1).encode()
+    atomic_write(Path(path), lambda f: f.write(text))

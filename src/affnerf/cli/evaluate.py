@@ -62,7 +62,7 @@ def metrics(pred: Path, gt: Path, category_map: Path | None = None, out: Path | 
         category_map: JSON or YAML mapping file name (or stem) -> category.
         out: write metrics.json here.
     """
-    from affnerf.data.format import write_json_atomic
+    from affnerf.fileio import write_json_atomic
     from affnerf.eval.folders import metrics_text, score_folders
 
     result = score_folders(pred, gt, category_map)

@@ -70,7 +70,7 @@ def score(mesh: Path, grasps: Path, out: Path | None = None) -> None:
     """
     import numpy as np
 
-    from affnerf.data.format import write_json_atomic
+    from affnerf.fileio import write_json_atomic
     from affnerf.grasp.io import read_grasps
     from affnerf.grasp.target import load_grasp_object
     from affnerf.grasp.scoring import score_grasps

@@ -16,52 +16,12 @@ import numpy as np
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.errors import input_error
-from affnerf.fileio import atomic_write
+from affnerf.fileio import read_json_file
 
 #: Format tag of ``dataset.json``.
 FORMAT = "affnerf-1"
 SPLITS = ("train", "val", "test", "unseen")
 SOURCES = ("procedural", "partnet-mobility")
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` with numpy scalars and arrays, tuples and paths turned into plain JSON types, recursively."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
-def write_json_atomic(path: Path, data: Any) -> None:
-    """Write JSON to ``path`` through a temporary file in the same folder and a rename.
-
-    A crash or a failed write leaves the previous file untouched.
-    """
-    text = json.dumps(jsonable(data), indent=1).encode()
-    atomic_write(Path(path), lambda f: f.write(text))
-
-
-def read_json(path: Path) -> Any:
-    """Parse a JSON file, reporting a missing or malformed file as one line."""
-    path = Path(path)
-    if not path.is_file():
-        raise input_error(path, "file not found")
-    try:
-        with open(path) as f:
-            return json.load(f)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise input_error(path, f"not valid JSON ({exc})") from None
 
 
 def check_pose(matrix: Any, where: Path, what: str = "transform_matrix", tol: float = 1e-3) -> np.ndarray:
@@ -237,7 +197,7 @@ def parse_transforms(data: Any, path: Path) -> ObjectRecord:
 
 def read_transforms(path: Path) -> ObjectRecord:
     """Read and validate one object's ``transforms.json``."""
-    return parse_transforms(read_json(path), Path(path))
+    return parse_transforms(read_json_file(path), Path(path))
 
 
 @dataclass(frozen=True)
@@ -297,4 +257,4 @@ def read_index(root: Path) -> DatasetIndex:
     path = Path(root) / "dataset.json"
     if not Path(root).is_dir():
         raise input_error(root, "dataset folder not found")
-    return parse_index(read_json(path), path)
+    return parse_index(read_json_file(path), path)

@@ -14,7 +14,8 @@ import numpy as np
 from tqdm import tqdm
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, CameraSampler, Intrinsics
-from affnerf.data.format import SPLITS, IndexEntry, read_json
+from affnerf.data.format import SPLITS, IndexEntry
+from affnerf.fileio import read_json_file
 from affnerf.data.index import update_index
 from affnerf.data.writer import is_complete, write_object
 from affnerf.errors import AffnerfError, input_error
@@ -116,7 +117,7 @@ def existing_copy_action(folder: Path, settings: dict[str, Any], overwrite: bool
         return "write"
     if overwrite:
         return "replace"
-    difference = settings_difference(recorded_settings(read_json(folder / "transforms.json")), settings)
+    difference = settings_difference(recorded_settings(read_json_file(folder / "transforms.json")), settings)
     if difference is None:
         return "keep"
     key, old, new = difference

@@ -20,12 +20,11 @@ from affnerf.data.format import (
     DatasetIndex,
     IndexEntry,
     parse_index,
-    read_json,
     read_transforms,
-    write_json_atomic,
 )
 from affnerf.data.writer import PARTIAL_DIR, is_complete
 from affnerf.errors import input_error
+from affnerf.fileio import read_json_file, write_json_atomic
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 log = logging.getLogger(__name__)
@@ -46,7 +45,7 @@ def index_lock(root: Path) -> Iterator[None]:
 def _load_or_new(root: Path) -> DatasetIndex:
     path = Path(root) / "dataset.json"
     if path.is_file():
-        return parse_index(read_json(path), path)
+        return parse_index(read_json_file(path), path)
     return DatasetIndex(list(AFFORDANCE_CLASSES), [], {})
 
 
@@ -113,7 +112,7 @@ def rebuild_index(root: Path) -> DatasetIndex:
         extra = {}
         if path.is_file():
             try:
-                extra = parse_index(read_json(path), path).extra
+                extra = parse_index(read_json_file(path), path).extra
             except Exception as exc:  # a damaged index is what a rebuild is for
                 log.warning("%s: unreadable (%s); rebuilt from the object folders", path, exc)
         index = DatasetIndex(list(AFFORDANCE_CLASSES), _sorted(scan_objects(root)), extra)

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from affnerf.data.cameras import Intrinsics
-from affnerf.data.format import FrameRecord, IndexEntry, ObjectRecord, PartRecord, write_json_atomic
+from affnerf.data.format import FrameRecord, IndexEntry, ObjectRecord, PartRecord
+from affnerf.fileio import write_json_atomic
 from affnerf.data.images import write_depth, write_labels, write_rgb
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.objects.asset import Material, ObjectAsset, SurfaceMesh, merge_parts

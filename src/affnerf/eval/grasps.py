@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from affnerf.data.dataset import Dataset, ObjectData
-from affnerf.data.format import write_json_atomic
+from affnerf.fileio import write_json_atomic
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.grasp.gripper import ParallelJawGripper

@@ -15,7 +15,7 @@ from typing import Any, Literal
 from PIL import Image
 
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
-from affnerf.data.format import write_json_atomic
+from affnerf.fileio import write_json_atomic
 from affnerf.errors import AffnerfError
 import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
 from affnerf.eval.protocol import Method, ProtocolConfig, evaluate

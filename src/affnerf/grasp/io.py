@@ -10,7 +10,8 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from affnerf.data.format import check_pose, write_json_atomic
+from affnerf.data.format import check_pose
+from affnerf.fileio import write_json_atomic
 from affnerf.fileio import read_json_file
 from affnerf.errors import input_error
 from affnerf.grasp.gripper import ParallelJawGripper

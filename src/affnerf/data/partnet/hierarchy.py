@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from affnerf.errors import input_error
+from affnerf.fileio import read_json_file
 
 
 @dataclass(frozen=True)
@@ -29,21 +30,6 @@ class Leaf:
     name: str
     objs: tuple[str, ...]
     ancestors: tuple[str, ...]
-
-
-def read_json(path: Path) -> Any:
-    """Read a JSON file.
-
-    Raises:
-        AffnerfError: a missing file or invalid JSON, naming the file.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise input_error(path, "file not found")
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise input_error(path, f"not a valid JSON file ({exc})") from None
 
 
 def _node_name(node: dict[str, Any]) -> str:
@@ -90,7 +76,7 @@ def leaves_of(nodes: Any, path: Path) -> list[Leaf]:
 
 def read_leaves(path: Path) -> list[Leaf]:
     """The leaves of a ``result.json`` file (see :func:`leaves_of`)."""
-    return leaves_of(read_json(path), Path(path))
+    return leaves_of(read_json_file(path), Path(path))
 
 
 def read_model_cat(path: Path) -> str:
@@ -99,7 +85,7 @@ def read_model_cat(path: Path) -> str:
     Raises:
         AffnerfError: a missing or invalid file, or no ``model_cat`` string in it.
     """
-    meta = read_json(path)
+    meta = read_json_file(path)
     cat = meta.get("model_cat") if isinstance(meta, dict) else None
     if not isinstance(cat, str) or not cat.strip():
         raise input_error(path, "no 'model_cat' string")
