@@ -1,4 +1,4 @@
-"""The affordance vocabulary (GUIDE section 3): fixed ids, names and display colours."""
+"""The affordance vocabulary (conventions §3): fixed ids, names and display colours."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Camera conventions of GUIDE 1."""
+"""Camera conventions of conventions §1."""
 
 from __future__ import annotations
 

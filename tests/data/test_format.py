@@ -1,4 +1,4 @@
-"""Round trips and validation of the dataset format (GUIDE 2)."""
+"""Round trips and validation of the dataset format (conventions §2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Invariants every procedural category keeps (GUIDE 1, 3)."""
+"""Invariants every procedural category keeps (conventions §1, §3)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 from affnerf.objects.asset import CANONICAL_HALF_EXTENT
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed
 
-#: Affordances each category's parts may carry, and those every object of it must have (GUIDE 3).
+#: Affordances each category's parts may carry, and those every object of it must have (conventions §3).
 ALLOWED = {
     "screwdriver": {"grasp", "screw"},
     "pen": {"grasp", "open", "write"},

@@ -55,7 +55,7 @@ def step_seconds(config: TrainConfig, frames: list[ObjectFrames], steps: int = 4
 
 
 def score_run(run: Path, data: Path, split: str = "val", protocol: ProtocolConfig = CURVE_PROTOCOL) -> dict[str, Any]:
-    """Mean metrics (GUIDE 5) of a run's newest checkpoint on a split."""
+    """Mean metrics (conventions §5) of a run's newest checkpoint on a split."""
     ds = Dataset.open(data)
     objects = [ds.load_object(e) for e in ds.objects(split=split)]
     method = ConditionedNeRFMethod(load_model(run))

@@ -16,7 +16,7 @@ app = SubcommandApp()
 
 @app.command(name="table2", is_default=True)
 def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
-    """Evaluate affordance at novel views like the paper's Table 2 (GUIDE 5).
+    """Evaluate affordance at novel views like the paper's Table 2 (conventions §5).
 
     For each object of the split: input views chosen by a fixed seed, K other views as targets; per category one
     confusion matrix over all target views. Writes OUT/metrics_<method>.json (OUT/metrics.json: AFF-NeRF's, or the
@@ -54,7 +54,7 @@ def metrics(pred: Path, gt: Path, category_map: Path | None = None, out: Path | 
     """Score a folder of predicted label PNGs against ground-truth label PNGs with the same file names.
 
     Prints mIoU, PA, MPA and their object-only variants per category (`all` without a category map) and their
-    mean, in the GUIDE 5 schema when written with --out.
+    mean, in the conventions §5 schema when written with --out.
 
     Args:
         pred: folder of predicted label PNGs (8-bit class ids).

@@ -1,4 +1,4 @@
-"""Cameras (GUIDE 1): pinhole intrinsics, camera-to-world poses on the upper hemisphere, and pixel rays.
+"""Cameras (conventions §1): pinhole intrinsics, camera-to-world poses on the upper hemisphere, and pixel rays.
 
 Poses are camera-to-world in the OpenGL/Blender convention: the camera looks along its -z axis, +y is up and
 +x right. Pixel (u, v) has its centre at (u + 0.5, v + 0.5); its ray has camera-frame direction
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Near and far bounds of every ray, metres (GUIDE 1).
+#: Near and far bounds of every ray, metres (conventions §1).
 NEAR, FAR = 0.1, 1.5
 
 
@@ -72,7 +72,7 @@ def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray = np.array([0.0,
 
 @dataclass(frozen=True)
 class CameraSampler:
-    """Where cameras go: on the upper hemisphere around the origin, looking at it (GUIDE 1).
+    """Where cameras go: on the upper hemisphere around the origin, looking at it (conventions §1).
 
     Attributes:
         elevation_deg: range of elevation above the xy plane, degrees.

@@ -1,4 +1,4 @@
-"""The dataset format (GUIDE 2): ``dataset.json`` and each object's ``transforms.json``, read and validated.
+"""The dataset format (conventions §2): ``dataset.json`` and each object's ``transforms.json``, read and validated.
 
 Readers check what later stages rely on (format version, finite rigid poses, sizes, class lists) and report a
 problem as one line naming the file. Writers are atomic: a temporary file renamed over the target.
@@ -95,7 +95,7 @@ class ObjectRecord:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
-        """The JSON form (GUIDE 2)."""
+        """The JSON form (conventions §2)."""
         intr = self.intrinsics
         out: dict[str, Any] = {
             "object_id": self.object_id,

@@ -1,4 +1,4 @@
-"""Reading and writing the dataset's image maps (GUIDE 2), with one-line errors that name the file.
+"""Reading and writing the dataset's image maps (conventions §2), with one-line errors that name the file.
 
 RGB is 8-bit PNG; depth is 16-bit PNG of z-depth in units of ``depth_unit_scale_factor`` metres (0 = no
 surface); affordance and part maps are 8-bit PNGs of class and part ids.

@@ -3,7 +3,7 @@
 The word for this in affnerf is *ray-cast*: *render* means volume rendering of a radiance field
 (:mod:`affnerf.rendering`, :func:`affnerf.model.views.render_view`).
 
-One ray per pixel through its centre (GUIDE 1), so colour, z-depth, affordance and part maps agree pixel for
+One ray per pixel through its centre (conventions §1), so colour, z-depth, affordance and part maps agree pixel for
 pixel. Shading is ambient plus a light at the camera, on smooth normals that keep creases sharp; the albedo comes
 from each face's material (plain colour, solid procedural pattern, or an image texture sampled at the UV).
 """

@@ -1,4 +1,4 @@
-"""Writing one object folder (GUIDE 2): rendered frames, ``mesh.ply`` and ``transforms.json``, all or nothing.
+"""Writing one object folder (conventions §2): rendered frames, ``mesh.ply`` and ``transforms.json``, all or nothing.
 
 The folder is assembled under ``<root>/.partial/`` and renamed into place only when complete, so an object folder
 that exists is whole; an interrupted write leaves only a stale temporary folder, removed by the next run.

@@ -15,7 +15,7 @@ from affnerf.data.raycast import FrameCaster
 from affnerf.objects.asset import ObjectAsset, merge_parts
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed
 
-#: The camera of the examples: in the band the training cameras come from (GUIDE 1), from the front-left.
+#: The camera of the examples: in the band the training cameras come from (conventions §1), from the front-left.
 EXAMPLE_EYE = 0.62 * np.array([np.cos(np.radians(35)) * np.cos(np.radians(-115)), np.cos(np.radians(35)) * np.sin(np.radians(-115)), np.sin(np.radians(35))])
 
 

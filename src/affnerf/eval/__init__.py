@@ -1,1 +1,1 @@
-"""Evaluation: segmentation metrics (GUIDE 5) and the protocol that reproduces the paper's Table 2."""
+"""Evaluation: segmentation metrics (conventions §5) and the protocol that reproduces the paper's Table 2."""

@@ -1,5 +1,5 @@
 """``affnerf metrics``: score two folders of label PNGs with the same file names, so any method's outputs can be
-compared with the same protocol (GUIDE 5)."""
+compared with the same protocol (conventions §5)."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ def _category(name: str, mapping: dict[str, str] | None, map_path: Path | None) 
 
 
 def score_folders(pred: Path, gt: Path, category_map: Path | None = None, num_classes: int | None = None) -> dict[str, Any]:
-    """Metrics (GUIDE 5 schema, method ``folder``) of every label PNG under ``gt`` against its namesake under ``pred``.
+    """Metrics (conventions §5 schema, method ``folder``) of every label PNG under ``gt`` against its namesake under ``pred``.
 
     Raises:
         AffnerfError: for a missing folder, a ground-truth file without prediction, mismatched sizes, or labels

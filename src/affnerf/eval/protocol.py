@@ -1,4 +1,4 @@
-"""The evaluation protocol of GUIDE 5 (the paper's Table 2), for any method.
+"""The evaluation protocol of conventions §5 (the paper's Table 2), for any method.
 
 For each object: input views chosen by a fixed seed, K other views as targets. A method sees the input views
 (images, poses, and for the per-object baselines their labels) and predicts RGB and affordance labels at the
@@ -119,7 +119,7 @@ class EvalResult:
         cat.views += len(gt)
 
     def to_json(self) -> dict[str, Any]:
-        """The GUIDE 5 ``metrics.json`` schema: per category, and the mean over categories."""
+        """The conventions §5 ``metrics.json`` schema: per category, and the mean over categories."""
         cats: dict[str, dict[str, Any]] = {}
         for name, c in sorted(self.categories.items()):
             m: dict[str, Any] = segmentation_metrics(c.confusion)

@@ -30,7 +30,7 @@ def metrics_table(results: Sequence[dict[str, Any]], metrics: Sequence[str] = MA
     average (the best value of each column in bold).
 
     Args:
-        results: ``metrics.json`` contents (GUIDE 5), one per method.
+        results: ``metrics.json`` contents (conventions §5), one per method.
         metrics: the metric keys to show.
     """
     categories = sorted({c for r in results for c in r["categories"]})
@@ -55,7 +55,7 @@ def table2_markdown(results: Sequence[dict[str, Any]], context: dict[str, Any] |
         f"# Affordance at novel views ({split} split), laid out like the paper's Table 2",
         "",
         f"{counts.get('objects', 0)} objects, {counts.get('views', 0)} target views per method; per-category "
-        "confusion matrices over all target views; classes present in the ground truth (GUIDE 5).",
+        "confusion matrices over all target views; classes present in the ground truth (conventions §5).",
         "",
         metrics_table(results, MAIN_METRICS),
         "",

@@ -1,6 +1,6 @@
 """``affnerf eval``: run the Table 2 protocol for one or more methods and write metrics, table and figure.
 
-Each method's results go to ``OUT/metrics_<method>.json`` (GUIDE 5 schema); ``OUT/metrics.json`` holds
+Each method's results go to ``OUT/metrics_<method>.json`` (conventions §5 schema); ``OUT/metrics.json`` holds
 AFF-NeRF's once it has been evaluated into ``OUT``, and until then the first method's. ``OUT/table2.md`` and ``OUT/figure.png`` are rebuilt from every method evaluated into ``OUT`` so
 far, so methods evaluated in separate calls (a baseline with its own run) end up in one table.
 """
@@ -38,7 +38,7 @@ class EvalConfig:
             retrieval, constant; ``all`` = every method but constant); see :mod:`affnerf.eval.registry`.
         input_views: views each method is given (1: single image; PixelNeRF-M is also run with 3, Semantic-NeRF
             with 20 as a many-view reference).
-        target_views: views scored per object (K = 20 in GUIDE 5).
+        target_views: views scored per object (K = 20 in conventions §5).
         scale: resolution of scored views as a fraction of the dataset's images.
         seed: seed of the view choice.
         categories: only these categories (comma-separated; empty = all).

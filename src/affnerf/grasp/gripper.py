@@ -3,7 +3,7 @@
 A grasp is a 4x4 pose of the gripper in the object's frame and an opening width. In the grasp frame the origin
 is the point midway between the finger pads, +x is the closing axis (finger 1 sits at -x, finger 2 at +x), +z is
 the approach direction (the gripper moves along +z to reach the object; the palm lies on the -z side), and
-+y = z x x. GUIDE 6: opening at most 0.08 m, finger pads 0.02 m.
++y = z x x. conventions §6: opening at most 0.08 m, finger pads 0.02 m.
 """
 
 from __future__ import annotations

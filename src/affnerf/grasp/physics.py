@@ -1,4 +1,4 @@
-"""A physics lift test for parallel-jaw grasps (GUIDE 6) in pybullet's headless DIRECT mode.
+"""A physics lift test for parallel-jaw grasps (conventions §6) in pybullet's headless DIRECT mode.
 
 Protocol of :func:`lift_test`, in a fresh pybullet client per call that is always disconnected afterwards:
 

@@ -1,4 +1,4 @@
-"""The Ferrari-Canny epsilon quality on the L1 grasp wrench space (GUIDE 6), as small pure functions.
+"""The Ferrari-Canny epsilon quality on the L1 grasp wrench space (conventions §6), as small pure functions.
 
 Each contact pushes into the object along its inward normal with unit normal force; friction (coefficient mu) is
 a cone linearised by ``edges`` directions; a soft finger adds a torsional moment about the normal of at most
@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-#: Default friction coefficient (GUIDE 6).
+#: Default friction coefficient (conventions §6).
 MU = 0.5
-#: Default number of friction cone edges (GUIDE 6).
+#: Default number of friction cone edges (conventions §6).
 CONE_EDGES = 8
 #: Default torsional moment per unit normal force (metres): friction over a pad patch of about 5 mm.
 TORSION = MU * 0.005
@@ -102,7 +102,7 @@ def hull_margin(wrenches: np.ndarray) -> float:
 
 
 def object_radius(vertices: np.ndarray, centroid: np.ndarray) -> float:
-    """Largest distance of a vertex from the centroid (the torque scale of GUIDE 6)."""
+    """Largest distance of a vertex from the centroid (the torque scale of conventions §6)."""
     return float(np.linalg.norm(vertices - centroid, axis=1).max())
 
 

@@ -1,4 +1,4 @@
-"""Segmentation metrics on confusion matrices (GUIDE 5), as in Semantic-NeRF's ``miou_valid_class``.
+"""Segmentation metrics on confusion matrices (conventions §5), as in Semantic-NeRF's ``miou_valid_class``.
 
 Per category one confusion matrix accumulates all target views; the classes counted are those present in its
 ground truth. IoU_c = TP / (TP + FP + FN); mIoU averages IoU over those classes; PA = correct / all pixels;
@@ -85,7 +85,7 @@ def mean_pixel_accuracy(conf: np.ndarray) -> float:
 
 
 def segmentation_metrics(conf: np.ndarray) -> dict[str, float]:
-    """mIoU, PA, MPA and their object-only variants of one confusion matrix (GUIDE 5 key names)."""
+    """mIoU, PA, MPA and their object-only variants of one confusion matrix (conventions §5 key names)."""
     obj = object_only(conf)
     return {
         "mIoU": mean_iou(conf),

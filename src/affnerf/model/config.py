@@ -1,4 +1,4 @@
-"""Model configuration: the architecture and how rays are sampled (GUIDE 4)."""
+"""Model configuration: the architecture and how rays are sampled (conventions §4)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ class ModelConfig:
     """Architecture and ray sampling.
 
     Attributes:
-        kind: ``affnerf`` (global shape and appearance codes, GUIDE 4) or ``pixelnerf`` (the PixelNeRF-M
+        kind: ``affnerf`` (global shape and appearance codes, conventions §4) or ``pixelnerf`` (the PixelNeRF-M
             baseline: pixel-aligned features projected with the input cameras).
         code_dim: size of the shape code and of the appearance code.
         encoder_width: channel multiplier of the two ResNet18 encoders (1.0 = standard ResNet18).

@@ -45,7 +45,7 @@ class PixelEncoding:
 def project(points: torch.Tensor, w2c: torch.Tensor, intrinsics: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """Points in a camera: (N, 3) world -> camera-frame positions (N, 3) and pixel coordinates (N, 2).
 
-    Pixel (u, v) has its centre at (u + 0.5, v + 0.5), as in GUIDE 1; the camera looks along -z.
+    Pixel (u, v) has its centre at (u + 0.5, v + 0.5), as in conventions §1; the camera looks along -z.
     """
     cam = points @ w2c[:3, :3].T + w2c[:3, 3]
     depth = (-cam[:, 2]).clamp(min=1e-4)

@@ -1,4 +1,4 @@
-"""Part-annotated objects: parts with meshes, affordances and materials, in the canonical frame (GUIDE 1, 3).
+"""Part-annotated objects: parts with meshes, affordances and materials, in the canonical frame (conventions §1, §3).
 
 An :class:`ObjectAsset` is what every object source produces (the procedural families and the PartNet-Mobility
 importer) and what the ray caster and dataset writer consume. Part ids are 1-based positions in ``parts``
@@ -16,7 +16,7 @@ import trimesh
 from affnerf.errors import AffnerfError
 from affnerf.vocab import affordance_id
 
-#: Half the side of the canonical cube: every object fits inside [-0.25, 0.25]^3 (GUIDE 1).
+#: Half the side of the canonical cube: every object fits inside [-0.25, 0.25]^3 (conventions §1).
 CANONICAL_HALF_EXTENT = 0.25
 
 Pattern = Literal["plain", "stripes", "checker", "speckle"]

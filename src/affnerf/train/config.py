@@ -39,7 +39,7 @@ class TrainConfig:
     Attributes:
         data: dataset folder (``dataset.json``).
         out: run folder (config, checkpoints, TensorBoard logs, metrics).
-        config: the preset the other values start from: ``paper`` (GUIDE 4) or ``small`` (2 CPU cores).
+        config: the preset the other values start from: ``paper`` (conventions §4) or ``small`` (2 CPU cores).
         steps: total steps of the run; a resumed run stops at the same total.
         resume: continue from the last checkpoint in ``out``.
         device: ``auto`` (CUDA when available), ``cpu`` or ``cuda``.
@@ -97,7 +97,7 @@ class TrainConfig:
     time_limit: float = 0.0
 
 
-#: The paper's configuration (GUIDE 4): two ResNet18s, codes of 32, PE 10/4, 64 + 128 samples over the full
+#: The paper's configuration (conventions §4): two ResNet18s, codes of 32, PE 10/4, 64 + 128 samples over the full
 #: [0.1, 1.5] m range, 1024 rays a step, Adam at 5e-4, lambda 4e-4, 400x300 images.
 PAPER = TrainConfig(data=Path("."), out=Path("."))
 

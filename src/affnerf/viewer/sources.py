@@ -29,7 +29,7 @@ class InputCamera:
     """The camera of the input image.
 
     Attributes:
-        c2w: (4, 4) camera-to-world, OpenGL convention (looks along -z, +y up; GUIDE 1).
+        c2w: (4, 4) camera-to-world, OpenGL convention (looks along -z, +y up; conventions §1).
         fov_y: vertical field of view, radians.
         aspect: width / height.
         image: the image file, or None.

@@ -1,4 +1,4 @@
-"""PartNet-Mobility import: URDF kinematics, part hierarchy, affordance mapping and OBJ loading (GUIDE 3).
+"""PartNet-Mobility import: URDF kinematics, part hierarchy, affordance mapping and OBJ loading (conventions §3).
 
 The entry point is :func:`load_partnet_object`, which turns an object folder into an
 :class:`~affnerf.objects.asset.ObjectAsset`; :func:`write_partnet_fixture` writes a tiny object in the same format

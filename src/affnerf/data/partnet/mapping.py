@@ -1,4 +1,4 @@
-"""The category-aware table from PartNet-Mobility names to affnerf categories and affordances (GUIDE 3).
+"""The category-aware table from PartNet-Mobility names to affnerf categories and affordances (conventions §3).
 
 The table ships as ``mapping.yaml`` beside this module (its header documents the schema); a user's YAML file with
 the same schema is merged over it. A leaf takes the affordance of its own name, else of its ancestors' names
@@ -37,7 +37,7 @@ class CategoryMapping:
         default: the affordance of leaves no name in ``parts`` matches.
         parts: node name (lower case) -> affordance.
         yaw_deg: rotation about +z (degrees) that turns the category's PartNet-Mobility front into the
-            procedural family's canonical front (GUIDE 1), e.g. 90 for cabinets, whose fronts face -x after the
+            procedural family's canonical front (conventions §1), e.g. 90 for cabinets, whose fronts face -x after the
             URDF's base joint but -y in affnerf.
     """
 
