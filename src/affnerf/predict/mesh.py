@@ -1,4 +1,4 @@
-"""Labelled meshes from fields: marching cubes on density in the canonical cube, each vertex labelled by the
+"""Labelled meshes from fields: marching cubes on density in the model's scene cube, each vertex labelled by the
 field's affordance there and coloured by its class.
 
 The functions take plain callables (points -> density, points -> class ids), so they work on a trained model

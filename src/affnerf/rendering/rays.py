@@ -1,4 +1,4 @@
-"""Rays of pixels (conventions §1 conventions) and their intersection with the canonical cube, in torch."""
+"""Rays of pixels (conventions §1) and their intersection with the canonical cube, in torch."""
 
 from __future__ import annotations
 
