@@ -2,11 +2,11 @@
 
 Nothing is decoded until asked for, so a dataset far larger than memory can be opened and sampled.
 
-Example:
-    >>> ds = Dataset.open("data/mini")                          # doctest: +SKIP
-    >>> obj = ds.load_object(ds.objects(split="train")[0])      # doctest: +SKIP
-    >>> obj.rgb(0).shape, obj.pose(0).shape                     # doctest: +SKIP
-    ((300, 400, 3), (4, 4))
+Use::
+
+    ds = Dataset.open("data/mini")
+    obj = ds.load_object(ds.objects(split="train")[0])
+    obj.rgb(0).shape, obj.pose(0).shape                     # ((300, 400, 3), (4, 4)) for 400x300 frames
 """
 
 from __future__ import annotations

@@ -1,9 +1,10 @@
 """Planning parallel-jaw grasps on a (labelled) mesh: antipodal candidates, parallel local search, jaw closing,
 collision check, Ferrari-Canny ranking.
 
-Example:
-    >>> obj = load_grasp_object("affordance_model.ply", need_affordance=True)   # doctest: +SKIP
-    >>> grasps = plan_grasps(obj, PlanConfig(affordance="grasp", num=16))        # doctest: +SKIP
+Use::
+
+    obj = load_grasp_object("affordance_model.ply", need_affordance=True)   # affnerf.grasp.target
+    grasps = plan_grasps(obj, PlanConfig(affordance="grasp", num=16))        # best first
 """
 
 from __future__ import annotations
