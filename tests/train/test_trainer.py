@@ -15,7 +15,8 @@ from affnerf.model.affnerf import AffNeRF
 from affnerf.train.cache import cached_frames
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
-from affnerf.train.trainer import train
+from affnerf.train import distributed as dist_utils
+from affnerf.train.trainer import Trainer, learning_rate, train
 from affnerf.data.dataset import Dataset
 
 
@@ -68,6 +69,27 @@ def test_interrupted_and_resumed_run_ends_with_the_same_weights(tiny_train_confi
     for key in a["model"]:
         assert torch.equal(a["model"][key], b["model"][key]), key
     assert a["optimizer"]["state"][0]["step"] == b["optimizer"]["state"][0]["step"]
+
+
+def test_train_iteration_takes_exactly_one_step_and_hooks_do_the_rest(tiny_train_config):
+    config = tiny_train_config(steps=4, checkpoint_every=2)
+    trainer = Trainer(config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    before = {k: v.detach().clone() for k, v in trainer.state.model.named_parameters()}
+    outputs = trainer.train_iteration(0)
+    assert set(outputs) == {"loss/total", "loss/mse", "loss/affordance_ce", "train/affordance_accuracy", "train/lr"}
+    assert all(v.ndim == 0 and not v.requires_grad for k, v in outputs.items() if k != "train/lr")
+    assert outputs["train/lr"] == config.optim.lr
+    assert trainer.state.optimizer.state_dict()["state"][0]["step"] == 1 and trainer.step == 0
+    assert any(not torch.equal(p, before[k]) for k, p in trainer.state.model.named_parameters())
+    assert not (config.out / "metrics.jsonl").read_text() and not any((config.out / "checkpoints").glob("*.pt"))
+    trainer.step = 1
+    trainer.after_iteration(outputs, out_of_time=True)  # logs (log_every 1) and checkpoints (out of time)
+    assert [json.loads(line)["step"] for line in (config.out / "metrics.jsonl").read_text().splitlines()] == [1]
+    assert (config.out / "checkpoints" / "step_00000001.pt").is_file()
+    summary = trainer.train()
+    assert summary.step == 4 and summary.scalars["train/lr"] == pytest.approx(learning_rate(config, 3))
+    assert sorted(p.name for p in (config.out / "checkpoints").iterdir())[-1] == "step_00000004.pt"
 
 
 def test_existing_run_needs_resume_and_keeps_its_checkpoints(tiny_train_config):

@@ -1,0 +1,113 @@
+"""What a training checkpoint holds and how a run folder is resumed.
+
+A checkpoint carries the model and optimiser, the model and training configs, the class list, and one entry per
+rank (``rank_states``) with that rank's sampler position, forward-pass generator and torch random state, so a run
+resumed by the same number of processes continues bit for bit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from affnerf.errors import AffnerfError
+from affnerf.fileio import write_json_atomic
+from affnerf.model.base import ConditionedNeRF
+from affnerf.train import distributed as dist_utils
+from affnerf.train.checkpoint import check_compatible, list_checkpoints, load_checkpoint, save_checkpoint
+from affnerf.train.config import TrainConfig, config_to_json
+from affnerf.train.sampler import RaySampler
+
+log = logging.getLogger(__name__)
+
+
+def prepare_run_folder(config: TrainConfig, ctx: dist_utils.Context) -> Path | None:
+    """The checkpoint to resume from (or None); refuses to overwrite an existing run without ``--resume``.
+
+    Rank 0 also creates the run folder and writes the resolved ``config.json``.
+    """
+    ckpt_dir = Path(config.out) / "checkpoints"
+    existing = list_checkpoints(ckpt_dir)
+    if existing and not config.resume:
+        raise AffnerfError(f"{config.out}: already holds a run (checkpoints/); use --resume or another --out")
+    if config.resume and not existing:
+        raise AffnerfError(f"{ckpt_dir}: no checkpoint to resume from")
+    if ctx.is_main:
+        Path(config.out).mkdir(parents=True, exist_ok=True)
+        write_json_atomic(Path(config.out) / "config.json", config_to_json(config))
+    return existing[-1] if config.resume else None
+
+
+def params_checksum(model: torch.nn.Module) -> float:
+    """Sum of the absolute values of every parameter (in float64): equal across replicas that agree."""
+    return float(sum(p.detach().double().abs().sum().item() for p in model.parameters()))
+
+
+@dataclass
+class TrainingState:
+    """The objects whose state a checkpoint saves and restores.
+
+    Attributes:
+        model: the unwrapped model (not its DistributedDataParallel wrapper).
+        optimizer: its optimiser.
+        sampler: this rank's ray sampler (object order, position, random draws).
+        generator: this rank's generator of the forward pass's sample perturbations.
+    """
+
+    model: ConditionedNeRF
+    optimizer: torch.optim.Optimizer
+    sampler: RaySampler
+    generator: torch.Generator
+
+    def rank_state(self) -> dict[str, Any]:
+        """This rank's data order and random state: sampler, forward-pass generator and torch's global RNG."""
+        return {
+            "sampler": self.sampler.state_dict(),
+            "generator": self.generator.get_state(),
+            "torch": torch.get_rng_state(),
+        }
+
+    def save(self, config: TrainConfig, ctx: dist_utils.Context, step: int, classes: list[str]) -> None:
+        """Write ``checkpoints/step_<step>.pt`` from rank 0 with every rank's state; all ranks must call it."""
+        states = dist_utils.gather_objects(ctx, self.rank_state())
+        if ctx.is_main:
+            payload = {
+                "model": self.model.state_dict(),
+                "optimizer": self.optimizer.state_dict(),
+                "model_config": dataclasses.asdict(config.model),
+                "num_classes": len(classes),
+                "affordance_classes": list(classes),
+                "background": [float(c) for c in self.sampler.objects[0].background],
+                "train_config": config_to_json(config),
+                "rank_states": states,
+            }
+            save_checkpoint(Path(config.out) / "checkpoints", step, payload, config.keep_checkpoints)
+        dist_utils.barrier(ctx)
+
+    def restore(self, path: Path, config: TrainConfig, ctx: dist_utils.Context, num_classes: int) -> int:
+        """Load a checkpoint into the model, optimiser and this rank's data and random state; returns its step.
+
+        A checkpoint saved by another number of processes restores the weights and optimiser only (with a
+        warning): data order and random state then restart from the seed.
+        """
+        data = load_checkpoint(path)
+        check_compatible(data, config.model, num_classes, path)
+        self.model.load_state_dict(data["model"])
+        self.optimizer.load_state_dict(data["optimizer"])
+        states = data.get("rank_states", [])
+        if len(states) == ctx.world:
+            state = states[ctx.rank]
+            self.sampler.load_state_dict(state["sampler"])
+            self.generator.set_state(state["generator"])
+            torch.set_rng_state(state["torch"])
+        else:
+            log.warning(
+                "%s: saved by %d processes, resumed by %d; data order and random state restart from the seed",
+                path, len(states), ctx.world,
+            )  # fmt: skip
+        return int(data["step"])
