@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 import pytest
 from PIL import Image
 
 from affnerf.errors import AffnerfError
-from affnerf.predict.image import prepare_image
+from affnerf.predict.image import MAX_BORDER_CONTACT, MIN_BACKGROUND_UNIFORMITY, prepare_image
 
 
 def _photo(width=120, height=90, bg=(240, 240, 240)):
@@ -70,3 +72,51 @@ def test_blank_missing_and_mismatched_inputs_are_clear_errors(tmp_path):
     small_mask = _save(tmp_path, "small.png", Image.new("L", (10, 10), 255))
     with pytest.raises(AffnerfError, match=r"small\.png: mask is 10x10, the image 120x90"):
         prepare_image(photo, 32, mask=small_mask)
+
+
+def _noise(width=120, height=90):
+    return np.random.default_rng(2).integers(0, 256, (height, width, 3)).astype(np.uint8)
+
+
+def _gradient(width=120, height=90):
+    ramp = np.linspace(0, 255, width)[None, :, None]
+    return np.broadcast_to(ramp, (height, width, 3)).round().astype(np.uint8)
+
+
+@pytest.mark.parametrize("kind", ["noise", "gradient"])
+def test_an_image_without_separable_object_is_doubtful_with_one_warning(tmp_path, caplog, kind):
+    rgb = _noise() if kind == "noise" else _gradient()
+    path = _save(tmp_path, f"{kind}.png", Image.fromarray(rgb))
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        prepared = prepare_image(path, 32)
+    sep = prepared.separation
+    assert sep.source == "uniform background" and not sep.confident
+    assert sep.background_uniformity < MIN_BACKGROUND_UNIFORMITY and sep.border_contact > MAX_BORDER_CONTACT
+    assert sep.problems[0].startswith("no uniform background: ")
+    assert sep.to_json()["confident"] is False and sep.to_json()["problems"] == list(sep.problems)
+    (record,) = caplog.records
+    assert record.getMessage().startswith(f"{path}: the object could not be separated with confidence (no uniform")
+    assert "give the object's mask with --mask FILE" in record.getMessage() and "\n" not in record.getMessage()
+
+
+def test_a_clean_photo_is_confident_and_a_mask_is_never_doubted(tmp_path, caplog):
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        clean = prepare_image(_save(tmp_path, "p.png", Image.fromarray(_photo())), 32).separation
+        mask = np.zeros((90, 120), np.uint8)
+        mask[:, :100] = 255  # most of the frame, along its border: the user's word for it
+        masked = prepare_image(_save(tmp_path, "n.png", Image.fromarray(_noise())), 32,
+                               mask=_save(tmp_path, "m.png", Image.fromarray(mask))).separation  # fmt: skip
+    assert clean.confident and clean.background_uniformity == 1.0 and clean.border_contact == 0.0
+    assert clean.object_fraction == pytest.approx(30 * 30 / (120 * 90))
+    assert masked.confident and masked.background_uniformity is None and masked.object_fraction > 0.8
+    assert not caplog.records
+
+
+def test_a_blank_frame_is_an_error_saying_what_to_give(tmp_path):
+    blank = _save(tmp_path, "white.png", Image.new("RGB", (64, 48), (255, 255, 255)))
+    with pytest.raises(AffnerfError, match=r"white\.png: no object found \(the image is blank or of one colour\); "
+                                           r"give a photo of an object"):  # fmt: skip
+        prepare_image(blank, 32)
+    empty = _save(tmp_path, "empty_mask.png", Image.new("L", (120, 90), 0))
+    with pytest.raises(AffnerfError, match=r"empty_mask\.png: no object found \(the mask is empty\); give a mask"):
+        prepare_image(_save(tmp_path, "p.png", Image.fromarray(_photo())), 32, mask=empty)

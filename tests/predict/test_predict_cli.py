@@ -6,11 +6,13 @@ import json
 
 import numpy as np
 import pytest
+import torch
 from PIL import Image
 
 from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
 from affnerf.meshio import read_labelled_ply
+from affnerf.predict.loading import resolve_checkpoint
 
 
 @pytest.fixture(scope="module")
@@ -84,8 +86,80 @@ def test_a_pixelnerf_run_cannot_predict_from_a_photo(trained_runs, photo, tmp_pa
 def test_a_folder_as_image_says_it_is_a_directory(trained_runs, tmp_path, capsys):
     folder = tmp_path / "photos"
     folder.mkdir()
-    args = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(folder), "--out", str(tmp_path / "p"), "--device", "cpu"]
+    args = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(folder), "--out", str(tmp_path / "p"),
+            "--device", "cpu"]  # fmt: skip
     assert main(args) == 2
     err = capsys.readouterr().err.strip()
     assert err == f"affnerf: error: {folder}: is a directory, not an image; give one image file (PNG, JPEG, ...)"
     assert not (tmp_path / "p" / "prediction.json").exists()
+
+
+def _small(run, image, out) -> list[str]:
+    return ["predict", "--run", str(run), "--image", str(image), "--out", str(out), "--views", "2", "--width", "16",
+            "--height", "12", "--resolution", "16", "--device", "cpu"]  # fmt: skip
+
+
+def _warnings(err: str) -> list[str]:
+    return [line for line in err.strip().splitlines() if line.startswith("affnerf: warning: ")]
+
+
+@pytest.mark.parametrize("kind", ["noise", "gradient"])
+def test_no_separable_object_warns_once_and_records_the_separation(trained_runs, tmp_path, capsys, kind):
+    if kind == "noise":
+        rgb = np.random.default_rng(0).integers(0, 256, (60, 80, 3)).astype(np.uint8)
+    else:
+        rgb = np.broadcast_to(np.linspace(0, 255, 80)[None, :, None], (60, 80, 3)).round().astype(np.uint8)
+    image = tmp_path / f"{kind}.png"
+    Image.fromarray(rgb).save(image)
+    out = tmp_path / "pred"
+    assert main(_small(trained_runs["affnerf"], image, out)) == 0  # a warning, not an error: outputs are written
+    # one line on the separation (the tiny model may add one that it predicts no surface at the default level)
+    (warning,) = [w for w in _warnings(capsys.readouterr().err) if "separated" in w]
+    assert warning.startswith(f"affnerf: warning: {image}: the object could not be separated with confidence (")
+    assert "give the object's mask with --mask FILE" in warning
+    separation = json.loads((out / "prediction.json").read_text())["separation"]
+    assert separation["source"] == "uniform background" and separation["confident"] is False
+    assert separation["background_uniformity"] < 0.5 and separation["problems"]
+
+
+def test_a_clean_photo_records_a_confident_separation_without_warning(trained_runs, photo, tmp_path, capsys):
+    args = _small(trained_runs["affnerf"], photo["rgb"], tmp_path / "pred")
+    assert main([*args, "--level", "0.5", "--grid-threshold", "0.1"]) == 0
+    assert not _warnings(capsys.readouterr().err)
+    separation = json.loads((tmp_path / "pred" / "prediction.json").read_text())["separation"]
+    assert separation["confident"] is True and separation["problems"] == []
+    assert 0.0 < separation["object_fraction"] < 0.9 and separation["background_uniformity"] == 1.0
+
+
+def _empty_model(run, path):
+    """The run's checkpoint with its density head turned off: zero weights, bias -100 (softplus ~ 0 everywhere)."""
+    data = torch.load(resolve_checkpoint(run), map_location="cpu", weights_only=True)
+    heads = [k for k in data["model"] if k.endswith("density.bias")]
+    assert heads
+    for bias in heads:
+        data["model"][bias].fill_(-100.0)
+        data["model"][bias.removesuffix("bias") + "weight"].zero_()
+    torch.save(data, path)
+    return path
+
+
+def test_a_model_without_surface_writes_no_mesh_says_so_and_keeps_the_other_outputs(
+    trained_runs, photo, tmp_path, capsys
+):
+    out = tmp_path / "pred"
+    assert main([*_small(trained_runs["affnerf"], photo["rgb"], out), "--level", "0.5", "--grid-threshold", "0.1"]) == 0
+    assert (out / "affordance_model.ply").is_file()  # an earlier prediction with a mesh
+    capsys.readouterr()
+    empty = _empty_model(trained_runs["affnerf"], tmp_path / "empty.pt")
+    assert main(_small(empty, photo["rgb"], out)) == 0
+    (warning,) = _warnings(capsys.readouterr().err)
+    assert warning.startswith(f"affnerf: warning: {empty}: for {photo['rgb']}, the model predicts no surface: ")
+    assert warning.endswith("so no mesh was written; lower --level or use a better-trained run")
+    summary = json.loads((out / "prediction.json").read_text())
+    assert summary["mesh"] is None and summary["mesh_note"].startswith("the model predicts no surface")
+    assert summary["classes_present"] == [] and summary["surface_area_m2"] == {}
+    assert not (out / "affordance_model.ply").exists() and not (out / "affordance_model.glb").exists()  # none stale
+    assert set(summary["files"]) == {"input.png", "turntable/000.png", "turntable/001.png", "turntable.gif",
+                                     "prediction.json"}  # fmt: skip
+    for name in summary["files"]:
+        assert (out / name).is_file(), name

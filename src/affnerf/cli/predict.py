@@ -19,6 +19,14 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply (vertex colours and an integer vertex
     property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped
     with affnerf is used.
+
+    Warnings (one line each on stderr; the outputs are written): the object could not be separated with confidence
+    (no uniform background, or it fills the frame or runs along its border: give --mask FILE), recorded under
+    `separation` in prediction.json; the model predicts no surface, so no mesh is written (`"mesh": null` and a
+    `mesh_note` in prediction.json).
+
+    Exit codes: 0 done, warnings included; 2 bad input (an image that is missing, unreadable, a folder, blank or of
+    one colour, an empty or mismatched mask, a run that cannot predict from photos).
     """
     from affnerf.predict.outputs import write_prediction
     from affnerf.predict.predictor import Predictor

@@ -3,12 +3,22 @@
 The object is separated from its background by, in order of preference: a mask file, the image's alpha channel,
 or a uniform background (estimated from the image border). Any size and mode is accepted: RGB, RGBA, grey,
 palette, 16-bit.
+
+How well that went is measured (:class:`Separation`): the share of the image the object covers, the share of the
+image's border it touches and, for a uniform background, the share of the border that is one colour. An image
+without a uniform background (noise, a gradient, a cluttered scene), or whose "object" fills the frame or runs
+along its border, is separated doubtfully: the model would be given a blob, so a warning says so and suggests
+``--mask FILE``, and the prediction goes on. An image with no object pixels at all (a blank or one-colour frame,
+an empty mask) is an error instead (exit code 2): there is nothing to encode, any output would be invented, and
+scripts can skip such frames by the exit code.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from PIL import Image
@@ -22,6 +32,63 @@ from affnerf.errors import input_error
 BACKGROUND_TOLERANCE = 0.06
 #: Smallest share of the image the object must cover.
 MIN_OBJECT_FRACTION = 0.0005
+#: Width in pixels of the image border the background colour and the object's border contact are measured on.
+BORDER_WIDTH = 2
+#: Smallest share of the border within ``BACKGROUND_TOLERANCE`` of its colour for a uniform background to be found
+#: (an object touching the border lowers it too: that is judged by ``MAX_BORDER_CONTACT``).
+MIN_BACKGROUND_UNIFORMITY = 0.5
+#: Largest share of the image an object separated with confidence covers.
+MAX_OBJECT_FRACTION = 0.9
+#: Largest share of the image border an object separated with confidence touches.
+MAX_BORDER_CONTACT = 0.25
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Separation:
+    """How the object was told from its background, and how confidently.
+
+    Attributes:
+        source: ``mask``, ``alpha`` or ``uniform background``.
+        object_fraction: share of the image's pixels that are object.
+        border_contact: share of the image's border pixels (``BORDER_WIDTH`` wide) that are object.
+        background_uniformity: for ``uniform background``, the share of the border pixels within
+            ``BACKGROUND_TOLERANCE`` of the border colour (1 on a clean backdrop); ``None`` otherwise.
+        problems: why the separation is doubtful, in a few words each; empty when it is confident.
+    """
+
+    source: str
+    object_fraction: float
+    border_contact: float
+    background_uniformity: float | None
+    problems: tuple[str, ...]
+
+    @property
+    def confident(self) -> bool:
+        return not self.problems
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``separation`` entry of ``prediction.json``."""
+        uniformity = None if self.background_uniformity is None else round(self.background_uniformity, 4)
+        return {
+            "source": self.source,
+            "confident": self.confident,
+            "object_fraction": round(self.object_fraction, 4),
+            "border_contact": round(self.border_contact, 4),
+            "background_uniformity": uniformity,
+            "problems": list(self.problems),
+        }
+
+    def warning(self, image: Path) -> str | None:
+        """The one-line warning of a doubtful separation (``None`` when confident)."""
+        if self.confident:
+            return None
+        return (
+            f"{image}: the object could not be separated with confidence ({'; '.join(self.problems)}), so the "
+            f"prediction may be a blob; give the object's mask with --mask FILE (white = object), or a photo of it "
+            f"on a plain background"
+        )
 
 
 @dataclass
@@ -33,22 +100,76 @@ class PreparedImage:
         mask: (H, W) bool object pixels of the original image.
         rgb: (H, W, 3) uint8 original image.
         bbox: (x0, y0, x1, y1) of the object in the original image.
-        source: how the object was separated: ``mask``, ``alpha`` or ``uniform background``.
+        separation: how the object was separated (``source``: ``mask``, ``alpha`` or ``uniform background``) and
+            how confidently.
     """
 
     crop: np.ndarray
     mask: np.ndarray
     rgb: np.ndarray
     bbox: tuple[int, int, int, int]
-    source: str
+    separation: Separation
+
+    @property
+    def source(self) -> str:
+        """How the object was separated: ``mask``, ``alpha`` or ``uniform background``."""
+        return self.separation.source
 
 
-def border_color(rgb: np.ndarray, width: int = 2) -> np.ndarray:
+def border_pixels(image: np.ndarray, width: int = BORDER_WIDTH) -> np.ndarray:
+    """(N, ...) the values of the image's outer ``width`` pixels (H, W, ...), the corners counted twice.
+
+    Example:
+        >>> border_pixels(np.arange(9).reshape(3, 3), 1).tolist()
+        [0, 1, 2, 6, 7, 8, 0, 3, 6, 2, 5, 8]
+    """
+    rest = image.shape[2:]
+    parts = [image[:width], image[-width:], image[:, :width], image[:, -width:]]
+    return np.concatenate([p.reshape(-1, *rest) for p in parts])
+
+
+def border_color(rgb: np.ndarray, width: int = BORDER_WIDTH) -> np.ndarray:
     """(3,) median colour (0..1) of the image's outer ``width`` pixels: the background of a centred object."""
-    border = np.concatenate(
-        [rgb[:width].reshape(-1, 3), rgb[-width:].reshape(-1, 3), rgb[:, :width].reshape(-1, 3), rgb[:, -width:].reshape(-1, 3)]
-    )
-    return np.median(border, axis=0) / 255.0
+    return np.median(border_pixels(rgb, width), axis=0) / 255.0
+
+
+def background_uniformity(rgb: np.ndarray, tolerance: float = BACKGROUND_TOLERANCE) -> float:
+    """Share of the (H, W, 3) uint8 image's border pixels within ``tolerance`` (per channel, 0..1) of the border
+    colour: 1 on a uniform backdrop, near 0 on noise or a gradient."""
+    border = border_pixels(rgb).astype(np.float64) / 255.0
+    return float((np.abs(border - border_color(rgb)).max(axis=-1) <= tolerance).mean())
+
+
+def separation_problems(object_fraction: float, border_contact: float, uniformity: float | None) -> tuple[str, ...]:
+    """Why a separation with these measures is doubtful (empty when it is not).
+
+    Example:
+        >>> separation_problems(0.2, 0.0, 1.0)
+        ()
+        >>> separation_problems(0.95, 0.1, None)
+        ('the object covers 95% of the image',)
+    """
+    problems = []
+    if uniformity is not None and uniformity < MIN_BACKGROUND_UNIFORMITY:
+        problems.append(f"no uniform background: {uniformity:.0%} of the image border is one colour")
+    if object_fraction > MAX_OBJECT_FRACTION:
+        problems.append(f"the object covers {object_fraction:.0%} of the image")
+    if border_contact > MAX_BORDER_CONTACT:
+        problems.append(f"the object touches {border_contact:.0%} of the image border")
+    return tuple(problems)
+
+
+def measure_separation(rgb: np.ndarray, mask: np.ndarray, source: str) -> Separation:
+    """How confidently the (H, W) bool ``mask`` separates the object in the (H, W, 3) uint8 image.
+
+    A mask file is the user's own statement of the object and is never doubted; alpha and uniform background
+    separations are doubtful when the object fills the frame or runs along its border, and a uniform background
+    also when the border is not of one colour.
+    """
+    fraction, contact = float(mask.mean()), float(border_pixels(mask).mean())
+    uniformity = background_uniformity(rgb) if source == "uniform background" else None
+    problems = () if source == "mask" else separation_problems(fraction, contact, uniformity)
+    return Separation(source, fraction, contact, uniformity, problems)
 
 
 def uniform_background_mask(rgb: np.ndarray, tolerance: float = BACKGROUND_TOLERANCE) -> np.ndarray:
@@ -92,9 +213,11 @@ def prepare_image(
         background: the training background colour the crop is placed on.
         mask: optional mask image (white or opaque = object), same size as the photo.
 
+    Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`).
+
     Raises:
         AffnerfError: naming the file, for a missing or unreadable image or mask, or an image with no object
-            (blank, or one colour).
+            (blank, or one colour; an empty mask): see the module's notes on why that is an error.
     """
     image = Path(image)
     pil = open_image(image)
@@ -111,10 +234,14 @@ def prepare_image(
         obj, source = uniform_background_mask(rgb), "uniform background"
     if obj.mean() < MIN_OBJECT_FRACTION:
         what = "the mask is empty" if source == "mask" else "the image is blank or of one colour"
-        raise input_error(mask if source == "mask" else image, f"no object found ({what})")
+        fix = "give a mask with white object pixels" if source == "mask" else "give a photo of an object"
+        raise input_error(mask if source == "mask" else image, f"no object found ({what}); {fix}")
     bbox = object_bbox(obj)
     assert bbox is not None
-    return PreparedImage(crop_object(rgb, obj, crop_size, background), obj, rgb, bbox, source)
+    separation = measure_separation(rgb, obj, source)
+    if not separation.confident:
+        logger.warning("%s", separation.warning(image))
+    return PreparedImage(crop_object(rgb, obj, crop_size, background), obj, rgb, bbox, separation)
 
 
 def save_rgb(path: Path, image: np.ndarray) -> None:

@@ -2,7 +2,8 @@
 
 ``input.png`` (the prepared crop), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
 ``affordance_model.ply`` (vertex colours and an integer vertex property ``affordance``),
-``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, the files written).
+``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, how confidently the object
+was separated from its background, the mesh or why there is none, the files written).
 Files are assembled in a temporary folder and moved into place at the end, so a failure leaves an earlier
 prediction in the folder untouched.
 """
@@ -10,6 +11,7 @@ prediction in the folder untouched.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
 import tempfile
@@ -26,6 +28,8 @@ from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
 from affnerf.pictures.compose import overlay_affordance
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,36 @@ def _gif(frames: list[np.ndarray], path: Path) -> None:
     images[0].save(path, save_all=True, append_images=images[1:], duration=120, loop=0)
 
 
+#: The mesh files of a prediction; removed from OUT when a new prediction there has no surface.
+MESH_FILES = ("affordance_model.ply", "affordance_model.glb")
+
+
+def mesh_record(mesh: LabelledMesh, resolution: int, level: float) -> dict[str, Any]:
+    """The ``mesh`` and ``mesh_note`` entries of ``prediction.json``: the mesh's size, or ``None`` with a note
+    saying why there is no mesh."""
+    if not len(mesh.faces):
+        note = (f"the model predicts no surface: its density never reaches the surface level {level:g} in the "
+                f"scene cube, so no mesh was written")  # fmt: skip
+        return {"mesh": None, "mesh_note": note}
+    size = {"vertices": len(mesh.vertices), "faces": len(mesh.faces), "resolution": resolution, "level": level}
+    return {"mesh": size, "mesh_note": None}
+
+
+def _clear_stale(out: Path, files: list[str]) -> None:
+    """Remove from ``out`` the turntable folder and any mesh file the new prediction does not write."""
+    if (out / "turntable").exists():
+        shutil.rmtree(out / "turntable")
+    for name in MESH_FILES:
+        if name not in files and (out / name).is_file():
+            (out / name).unlink()
+
+
 def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, Any]:
-    """Run the whole prediction and write its files; returns the content of ``prediction.json``."""
+    """Run the whole prediction and write its files; returns the content of ``prediction.json``.
+
+    A model that predicts no surface gives no mesh: the other files are written, ``mesh`` is ``None`` with a
+    ``mesh_note`` saying why, and a one-line warning names the checkpoint and the image.
+    """
     obj = predictor.encode_image(config.image, config.mask)
     intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)
     frames = []
@@ -114,19 +146,20 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "model": str(predictor.loaded.path),
             "model_step": predictor.loaded.step,
             "object_separated_by": obj.prepared.source,
+            "separation": obj.prepared.separation.to_json(),
             "object_bbox": list(obj.prepared.bbox),
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
-            "mesh": {"vertices": len(mesh.vertices), "faces": len(mesh.faces), "resolution": config.resolution,
-                     "level": predictor.surface_level(config.level)},  # fmt: skip
+            **mesh_record(mesh, config.resolution, predictor.surface_level(config.level)),
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")
-        for name in ("turntable",):
-            if (out / name).exists():
-                shutil.rmtree(out / name)
+        _clear_stale(out, files)
         for entry in os.listdir(tmp):
             os.replace(tmp / entry, out / entry)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+    if summary["mesh"] is None:
+        logger.warning("%s: for %s, %s; lower --level or use a better-trained run", predictor.loaded.path,
+                       config.image, summary["mesh_note"])  # fmt: skip
     return summary
