@@ -55,7 +55,9 @@ def test_mask_file_and_any_size(tmp_path):
     rgb = np.random.default_rng(1).integers(0, 255, (301, 517, 3)).astype(np.uint8)  # no uniform background at all
     mask = np.zeros((301, 517), np.uint8)
     mask[100:200, 300:350] = 255
-    prepared = prepare_image(_save(tmp_path, "n.jpg", Image.fromarray(rgb)), 48, mask=_save(tmp_path, "m.png", Image.fromarray(mask)))
+    prepared = prepare_image(
+        _save(tmp_path, "n.jpg", Image.fromarray(rgb)), 48, mask=_save(tmp_path, "m.png", Image.fromarray(mask))
+    )
     assert prepared.bbox == (300, 100, 350, 200) and prepared.source == "mask"
 
 

@@ -23,7 +23,12 @@ def photo(train_dataset, tmp_path_factory):
     rgb = obj.rgb(0)
     folder = tmp_path_factory.mktemp("photos")
     big = Image.fromarray(rgb).resize((rgb.shape[1] * 5, rgb.shape[0] * 5), Image.NEAREST)
-    paths = {"rgb": folder / "rgb.png", "grey": folder / "grey.png", "rgba": folder / "rgba.png", "jpg": folder / "big.jpg"}
+    paths = {
+        "rgb": folder / "rgb.png",
+        "grey": folder / "grey.png",
+        "rgba": folder / "rgba.png",
+        "jpg": folder / "big.jpg",
+    }
     big.save(paths["rgb"])
     big.convert("L").save(paths["grey"])
     alpha = Image.fromarray(((obj.affordance(0) > 0) * 255).astype(np.uint8)).resize(big.size, Image.NEAREST)
@@ -38,8 +43,8 @@ def photo(train_dataset, tmp_path_factory):
 def test_predict_writes_every_output(trained_runs, photo, tmp_path, capsys, kind):
     out = tmp_path / "pred"
     args = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(photo[kind]), "--out", str(out),
-            "--views", "3", "--width", "32", "--height", "24", "--resolution", "24", "--level", "0.5", "--device", "cpu",
-            "--grid-threshold", "0.1"]  # fmt: skip
+            "--views", "3", "--width", "32", "--height", "24", "--resolution", "24", "--level", "0.5",
+            "--device", "cpu", "--grid-threshold", "0.1"]  # fmt: skip
     assert main(args) == 0
     summary = json.loads((out / "prediction.json").read_text())
     for name in summary["files"]:
@@ -78,7 +83,15 @@ def test_blank_and_missing_images_are_one_line_errors_and_keep_earlier_outputs(t
 
 
 def test_a_pixelnerf_run_cannot_predict_from_a_photo(trained_runs, photo, tmp_path, capsys):
-    args = ["predict", "--run", str(trained_runs["pixelnerf"]), "--image", str(photo["rgb"]), "--out", str(tmp_path / "x")]
+    args = [
+        "predict",
+        "--run",
+        str(trained_runs["pixelnerf"]),
+        "--image",
+        str(photo["rgb"]),
+        "--out",
+        str(tmp_path / "x"),
+    ]
     assert main(args) == 2
     assert "needs the input camera's pose" in capsys.readouterr().err
 

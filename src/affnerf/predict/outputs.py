@@ -25,9 +25,9 @@ from PIL import Image
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
+from affnerf.pictures.compose import overlay_affordance
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
-from affnerf.pictures.compose import overlay_affordance
 
 logger = logging.getLogger(__name__)
 
