@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 TORCH_PIN := torch==2.13.0
 DEMO_OUT ?= demo_out
 
-.PHONY: install test demo clean
+.PHONY: install test lint format demo clean
 
 install: $(STAMP)
 
@@ -18,8 +18,17 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e ".[dev]"
 	touch $(STAMP)
 
-test: install
+test: install lint
 	$(BIN)/python -m pytest -q
+
+# ruff: lint and formatting (settings in pyproject.toml); `make format` rewrites files in place.
+lint: install
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+format: install
+	$(BIN)/ruff check --fix .
+	$(BIN)/ruff format .
 
 demo: install
 	$(BIN)/affnerf demo --out $(DEMO_OUT)

@@ -30,11 +30,47 @@ from affnerf.train.trainer import train
 HERE = Path(__file__).parent
 M = SMALL.model
 CANDIDATES = {
-    "A": ("field 96x4, 32+32 samples, 512 rays", replace(SMALL, rays_per_step=512, model=replace(M, field_width=96, field_depth=4, num_coarse=32, num_fine=32, color_width=48, affordance_width=48))),
-    "B": ("field 64x4, 24+24 samples, 256 rays", replace(SMALL, rays_per_step=256, model=replace(M, field_width=64, field_depth=4, num_coarse=24, num_fine=24, color_width=32, affordance_width=32))),
-    "C": ("field 48x3, 16+16 samples, 256 rays", replace(SMALL, rays_per_step=256, model=replace(M, field_width=48, field_depth=3, num_coarse=16, num_fine=16, color_width=32, affordance_width=32))),
-    "D": ("field 64x4, 48 coarse only, 256 rays", replace(SMALL, rays_per_step=256, model=replace(M, field_width=64, field_depth=4, num_coarse=48, num_fine=0, color_width=32, affordance_width=32))),
-}  # fmt: skip
+    "A": (
+        "field 96x4, 32+32 samples, 512 rays",
+        replace(
+            SMALL,
+            rays_per_step=512,
+            model=replace(
+                M, field_width=96, field_depth=4, num_coarse=32, num_fine=32, color_width=48, affordance_width=48
+            ),
+        ),
+    ),
+    "B": (
+        "field 64x4, 24+24 samples, 256 rays",
+        replace(
+            SMALL,
+            rays_per_step=256,
+            model=replace(
+                M, field_width=64, field_depth=4, num_coarse=24, num_fine=24, color_width=32, affordance_width=32
+            ),
+        ),
+    ),
+    "C": (
+        "field 48x3, 16+16 samples, 256 rays",
+        replace(
+            SMALL,
+            rays_per_step=256,
+            model=replace(
+                M, field_width=48, field_depth=3, num_coarse=16, num_fine=16, color_width=32, affordance_width=32
+            ),
+        ),
+    ),
+    "D": (
+        "field 64x4, 48 coarse only, 256 rays",
+        replace(
+            SMALL,
+            rays_per_step=256,
+            model=replace(
+                M, field_width=64, field_depth=4, num_coarse=48, num_fine=0, color_width=32, affordance_width=32
+            ),
+        ),
+    ),
+}
 
 
 def dataset(root: Path) -> Path:
@@ -55,14 +91,31 @@ def main() -> None:
     ds = Dataset.open(data)
     objects = [ds.load_object(e) for e in ds.objects(split="val")]
     constant = evaluate(ConstantMethod(0), objects, CURVE_PROTOCOL, "val", len(ds.affordance_classes)).to_json()["mean"]
-    results = {"benchmark": "small_config", "machine": describe_machine(), "minutes": args.minutes,
-               "protocol": CURVE_PROTOCOL.__dict__, "constant_guess": constant, "candidates": {}}  # fmt: skip
+    results = {
+        "benchmark": "small_config",
+        "machine": describe_machine(),
+        "minutes": args.minutes,
+        "protocol": CURVE_PROTOCOL.__dict__,
+        "constant_guess": constant,
+        "candidates": {},
+    }
     started = time.time()
     names = args.candidates.split(",")
     runs = args.work / "runs"
     # decode the training frames once (a 1-step run), then time every candidate alone before any training
-    train(replace(SMALL, data=data, out=runs / "warmup", steps=1, val_every=0, progress=False, cache_dir=runs / "cache",
-                  image_scale=0.25, resume=(runs / "warmup" / "checkpoints").is_dir()))  # fmt: skip
+    train(
+        replace(
+            SMALL,
+            data=data,
+            out=runs / "warmup",
+            steps=1,
+            val_every=0,
+            progress=False,
+            cache_dir=runs / "cache",
+            image_scale=0.25,
+            resume=(runs / "warmup" / "checkpoints").is_dir(),
+        )
+    )
     frames = [load_frames(p) for p in sorted((runs / "cache").iterdir()) if (p / "meta.json").is_file()]
     timing = {n: step_seconds(replace(CANDIDATES[n][1], image_scale=0.25), frames) for n in names}
     print("seconds per step:", {n: round(t, 4) for n, t in timing.items()}, flush=True)

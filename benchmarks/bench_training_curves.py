@@ -42,8 +42,16 @@ def main() -> None:
     fast = replace(SMALL, data=args.data, cache_dir=runs / "cache", image_scale=0.25)
     m = fast.model
     reference = reference_variant(replace(fast, model=replace(m, num_coarse=2 * m.num_coarse, num_fine=2 * m.num_fine)))
-    train(replace(fast, out=runs / "warmup", steps=1, val_every=0, progress=False,
-                  resume=(runs / "warmup" / "checkpoints").is_dir()))  # fmt: skip
+    train(
+        replace(
+            fast,
+            out=runs / "warmup",
+            steps=1,
+            val_every=0,
+            progress=False,
+            resume=(runs / "warmup" / "checkpoints").is_dir(),
+        )
+    )
     frames = [load_frames(p) for p in sorted((runs / "cache").iterdir()) if (p / "meta.json").is_file()]
     timing = {"reference": step_seconds(reference, frames), "fast": step_seconds(fast, frames)}
     print("seconds per step:", timing, flush=True)

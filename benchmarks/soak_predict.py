@@ -42,7 +42,9 @@ def soak(run: Path, images: list[Path], count: int, views: int) -> dict:
         for i in range(count):
             image = images[i % len(images)]
             start = time.perf_counter()
-            write_prediction(predictor, PredictConfig(image=image, out=Path(tmp) / f"{i:02d}", views=views, device="cpu"))
+            write_prediction(
+                predictor, PredictConfig(image=image, out=Path(tmp) / f"{i:02d}", views=views, device="cpu")
+            )
             gc.collect()
             records.append({"image": image.name, "seconds": time.perf_counter() - start, "rss_mb": rss_mb()})
     first_round = records[min(len(images), count) - 1]["rss_mb"]
@@ -73,8 +75,10 @@ def main() -> None:
     result = soak(args.run or shipped_model(), images, args.count, args.views)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
-    print(f"RSS after the first round {result['rss_mb_after_first_round']:.1f} MB, after {args.count} predictions "
-          f"{result['rss_mb_after_last']:.1f} MB (growth {result['growth_mb_after_first_round']:+.1f} MB)")
+    print(
+        f"RSS after the first round {result['rss_mb_after_first_round']:.1f} MB, after {args.count} predictions "
+        f"{result['rss_mb_after_last']:.1f} MB (growth {result['growth_mb_after_first_round']:+.1f} MB)"
+    )
 
 
 if __name__ == "__main__":

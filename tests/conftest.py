@@ -23,6 +23,7 @@ def shared_partnet() -> Path:
         pytest.skip(f"shared PartNet-Mobility data not found at {SHARED_PARTNET}")
     return SHARED_PARTNET
 
+
 def _tiny_config(out: Path, **kwargs) -> GenerateConfig:
     """A dataset small enough to generate in about a second."""
     base = dict(out=out, categories="screwdriver,pen", objects_per_category=3, views=5, width=64, height=48, seed=3)
@@ -64,7 +65,9 @@ def train_dataset(tmp_path_factory) -> Path:
     """Three screwdrivers and three bottles (one each in train, val and test), 8 views of 40x30."""
     root = tmp_path_factory.mktemp("train") / "ds"
     generate_dataset(
-        GenerateConfig(out=root, categories="screwdriver,bottle", objects_per_category=3, views=8, width=40, height=30, seed=1),
+        GenerateConfig(
+            out=root, categories="screwdriver,bottle", objects_per_category=3, views=8, width=40, height=30, seed=1
+        ),
         progress=False,
     )
     return root
@@ -105,10 +108,22 @@ def trained_runs(train_dataset, tmp_path_factory) -> dict[str, Path]:
     runs = {}
     for kind, views in (("affnerf", 1), ("pixelnerf", 3)):
         config = replace(
-            SMALL, data=train_dataset, out=root / kind, steps=30, model=replace(TINY_MODEL, kind=kind), rays_per_step=128,
-            objects_per_step=2, input_views=views, checkpoint_every=30, log_every=10, val_every=0, progress=False,
-            device="cpu", cache_dir=root / f"cache-{kind}", image_scale=1.0,
-        )  # fmt: skip
+            SMALL,
+            data=train_dataset,
+            out=root / kind,
+            steps=30,
+            model=replace(TINY_MODEL, kind=kind),
+            rays_per_step=128,
+            objects_per_step=2,
+            input_views=views,
+            checkpoint_every=30,
+            log_every=10,
+            val_every=0,
+            progress=False,
+            device="cpu",
+            cache_dir=root / f"cache-{kind}",
+            image_scale=1.0,
+        )
         train(config)
         runs[kind] = config.out
     return runs

@@ -32,7 +32,9 @@ def test_written_file_is_readable_by_others_under_a_usual_umask(tmp_path):
     assert path.stat().st_mode & 0o777 == 0o644
 
 
-@pytest.mark.parametrize(("content", "problem"), [(None, "file not found"), (b"{nope", "not valid JSON"), (b"\xff\xfe", "not valid JSON")])
+@pytest.mark.parametrize(
+    ("content", "problem"), [(None, "file not found"), (b"{nope", "not valid JSON"), (b"\xff\xfe", "not valid JSON")]
+)
 def test_bad_json_files_name_the_file(tmp_path, content, problem):
     path = tmp_path / "c.json"
     if content is not None:

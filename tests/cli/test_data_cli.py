@@ -71,7 +71,9 @@ def test_import_bad_input_names_the_file_and_writes_nothing(tmp_path, capsys, da
         meta["model_cat"] = "Spoon"
         (src / "meta.json").write_text(json.dumps(meta))
     out = tmp_path / "ds"
-    code = main(["data", "import-partnet", str(src), "--out", str(out), "--views", "1", "--width", "16", "--height", "12"])
+    code = main(
+        ["data", "import-partnet", str(src), "--out", str(out), "--views", "1", "--width", "16", "--height", "12"]
+    )
     assert code == 2
     line = _error_line(capsys)
     import re
@@ -113,8 +115,9 @@ def test_a_model_cat_without_mapping_says_how_to_give_one_and_the_help_example_w
     assert main(args) == 2
     line = _error_line(capsys)
     assert "meta.json: model_cat 'Mug' has no mapping (known: Bottle," in line
-    assert line.endswith("give one with --mapping FILE (a minimal file is shown by 'affnerf data import-partnet "
-                         "--help')")  # fmt: skip
+    assert line.endswith(
+        "give one with --mapping FILE (a minimal file is shown by 'affnerf data import-partnet --help')"
+    )
     help_text = _help_text(capsys, "data", "import-partnet")
     assert ", ".join(AFFORDANCE_CLASSES[1:]) in " ".join(help_text.split())
     example = tmp_path / "mapping.yaml"
@@ -134,8 +137,10 @@ def test_reimport_with_other_settings_exits_2_naming_overwrite_which_replaces(tm
     assert main([*args, "--views", "2"]) == 2
     line = _error_line(capsys)
     folder = out / "cabinet" / "cabinet_pmtoy"
-    assert line == (f"affnerf: error: {folder / 'transforms.json'}: already imported with views=1, not 2; import with "
-                    "the same settings, pass --overwrite to replace it, or use another --out")  # fmt: skip
+    assert line == (
+        f"affnerf: error: {folder / 'transforms.json'}: already imported with views=1, not 2; import with "
+        "the same settings, pass --overwrite to replace it, or use another --out"
+    )
     assert len(list((folder / "rgb").iterdir())) == 1
     assert main([*args, "--views", "2", "--overwrite"]) == 0
     assert len(list((folder / "rgb").iterdir())) == 2

@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from affnerf.data.cameras import CameraSampler, Intrinsics, look_at, pixel_directions, project, unproject_depth, world_rays
+from affnerf.data.cameras import (
+    CameraSampler,
+    Intrinsics,
+    look_at,
+    pixel_directions,
+    project,
+    unproject_depth,
+    world_rays,
+)
 
 
 def test_pixel_centre_direction_follows_the_guide():

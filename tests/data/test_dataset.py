@@ -7,8 +7,10 @@ from affnerf.data.format import IndexEntry
 
 
 def _entries(spec: str) -> list[IndexEntry]:
-    return [IndexEntry(id=f"{cat}_{i}", category=cat, path=f"{cat}_{i}", split="test", source="procedural")
-            for i, cat in enumerate(spec.split())]  # fmt: skip
+    return [
+        IndexEntry(id=f"{cat}_{i}", category=cat, path=f"{cat}_{i}", split="test", source="procedural")
+        for i, cat in enumerate(spec.split())
+    ]
 
 
 def test_interleave_takes_categories_in_turn_by_name():

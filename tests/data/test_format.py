@@ -40,8 +40,22 @@ def test_reader_returns_what_the_ray_caster_produced(tiny_dataset):
 
 def test_transforms_follow_the_guide(tiny_dataset):
     data = json.loads((tiny_dataset / "pen" / "pen_0000" / "transforms.json").read_text())
-    for key in ("object_id", "category", "w", "h", "fl_x", "fl_y", "cx", "cy", "camera_angle_x", "background_color",
-                "depth_unit_scale_factor", "affordance_classes", "parts", "frames"):  # fmt: skip
+    for key in (
+        "object_id",
+        "category",
+        "w",
+        "h",
+        "fl_x",
+        "fl_y",
+        "cx",
+        "cy",
+        "camera_angle_x",
+        "background_color",
+        "depth_unit_scale_factor",
+        "affordance_classes",
+        "parts",
+        "frames",
+    ):
         assert key in data
     assert data["affordance_classes"] == list(AFFORDANCE_CLASSES)
     assert data["depth_unit_scale_factor"] == 0.001
@@ -59,7 +73,9 @@ def test_mesh_ply_carries_part_ids_that_match_the_parts(tiny_dataset):
     ids = {p.id: p.affordance for p in record.parts}
     assert set(np.unique(mesh.face_props["part"]).tolist()) == set(ids)
     for pid, aff in ids.items():
-        assert set(mesh.face_props["affordance"][mesh.face_props["part"] == pid].tolist()) == {AFFORDANCE_CLASSES.index(aff)}
+        assert set(mesh.face_props["affordance"][mesh.face_props["part"] == pid].tolist()) == {
+            AFFORDANCE_CLASSES.index(aff)
+        }
     assert np.abs(mesh.vertices).max() <= 0.25
 
 

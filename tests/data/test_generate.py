@@ -43,9 +43,10 @@ def test_shards_are_disjoint_and_together_make_the_same_dataset(tmp_path, tiny_d
     assert not (ids[0] & ids[1]) and not (ids[1] & ids[2]) and not (ids[0] & ids[2])
     _same_tree(root / "pen", tiny_dataset / "pen")
     _same_tree(root / "screwdriver", tiny_dataset / "screwdriver")
-    assert json.loads((root / "dataset.json").read_text())["objects"] == json.loads(
-        (tiny_dataset / "dataset.json").read_text()
-    )["objects"]
+    assert (
+        json.loads((root / "dataset.json").read_text())["objects"]
+        == json.loads((tiny_dataset / "dataset.json").read_text())["objects"]
+    )
 
 
 def test_two_workers_write_the_same_bytes(tmp_path, tiny_dataset, tiny_config):

@@ -63,7 +63,9 @@ def test_box_depth_is_exact_and_labels_follow_parts():
 
 
 def test_background_is_exact_and_shading_follows_the_camera_light():
-    frame = _render([Part("p", "grasp", box((0.2, 0.2, 0.2)), (Material((0.5, 0.5, 0.5)),))], background=(0.0, 1.0, 0.0))
+    frame = _render(
+        [Part("p", "grasp", box((0.2, 0.2, 0.2)), (Material((0.5, 0.5, 0.5)),))], background=(0.0, 1.0, 0.0)
+    )
     bg = frame.part == 0
     assert np.all(frame.rgb[bg] == [0, 255, 0])
     # top face, normal +z: light = 0.35 + 0.65 * cos(angle between the normal and the pixel's ray)

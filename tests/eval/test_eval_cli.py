@@ -11,15 +11,36 @@ from PIL import Image
 
 from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
-from affnerf.eval.runner import EvalConfig, build_method
 from affnerf.eval.methods import affnerf as conditioned_methods
 from affnerf.eval.protocol import METRIC_KEYS
+from affnerf.eval.runner import EvalConfig, build_method
 
 
 def _eval(run, data, out, method, *extra):
-    return main(["eval", "--run", str(run), "--data", str(data), "--split", "test", "--method", method,
-                 "--out", str(out), "--target-views", "3", "--scale", "0.25", "--semantic-steps", "10", "--device", "cpu",
-                 *extra])  # fmt: skip
+    return main(
+        [
+            "eval",
+            "--run",
+            str(run),
+            "--data",
+            str(data),
+            "--split",
+            "test",
+            "--method",
+            method,
+            "--out",
+            str(out),
+            "--target-views",
+            "3",
+            "--scale",
+            "0.25",
+            "--semantic-steps",
+            "10",
+            "--device",
+            "cpu",
+            *extra,
+        ]
+    )
 
 
 def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dataset, tmp_path):
@@ -74,8 +95,22 @@ def test_metrics_scores_label_folders_per_category(tmp_path, capsys):
     assert list(m["categories"]) == ["all"]
     assert m["categories"]["all"]["PA"] == pytest.approx(7 / 8)
     (tmp_path / "map.json").write_text(json.dumps({"a.png": "mug", "b": "pen"}))
-    assert main(["metrics", "--pred", str(pred), "--gt", str(gt), "--category-map", str(tmp_path / "map.json"),
-                 "--out", str(tmp_path / "m2.json")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "metrics",
+                "--pred",
+                str(pred),
+                "--gt",
+                str(gt),
+                "--category-map",
+                str(tmp_path / "map.json"),
+                "--out",
+                str(tmp_path / "m2.json"),
+            ]
+        )
+        == 0
+    )
     m2 = json.loads((tmp_path / "m2.json").read_text())
     assert m2["categories"]["pen"]["mIoU"] == 1.0
     assert m2["categories"]["mug"]["mIoU"] == pytest.approx((1 / 2 + 2 / 3) / 2)

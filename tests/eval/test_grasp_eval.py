@@ -10,9 +10,30 @@ from affnerf.eval.grasps import summarise
 
 def test_grasp_eval_writes_table3(trained_runs, train_dataset, tmp_path):
     out = tmp_path / "grasps"
-    args = ["eval", "grasp", "--run", str(trained_runs["affnerf"]), "--data", str(train_dataset), "--out", str(out),
-            "--categories", "screwdriver", "--num", "4", "--lift-grasps", "2", "--resolution", "32",
-            "--level", "0.5", "--refine-steps", "2", "--device", "cpu"]  # fmt: skip
+    args = [
+        "eval",
+        "grasp",
+        "--run",
+        str(trained_runs["affnerf"]),
+        "--data",
+        str(train_dataset),
+        "--out",
+        str(out),
+        "--categories",
+        "screwdriver",
+        "--num",
+        "4",
+        "--lift-grasps",
+        "2",
+        "--resolution",
+        "32",
+        "--level",
+        "0.5",
+        "--refine-steps",
+        "2",
+        "--device",
+        "cpu",
+    ]
     assert main(args) == 0
     objects = json.loads((out / "grasp_objects.json").read_text())
     assert {o["category"] for o in objects} == {"screwdriver"}
@@ -29,11 +50,17 @@ def test_grasp_eval_writes_table3(trained_runs, train_dataset, tmp_path):
 
 def test_summary_counts_objects_without_grasps_as_zero_quality():
     objects = [
-        {"category": "pen", "original": {"grasps": 2, "epsilon": [0.2, 0.4], "on_grasp": [True, False], "lift": [True]},
-         "affordance": {"grasps": 0, "epsilon": [], "on_grasp": [], "lift": []}},
-        {"category": "pen", "original": {"grasps": 1, "epsilon": [0.1], "on_grasp": [True], "lift": [False]},
-         "affordance": {"grasps": 1, "epsilon": [0.5], "on_grasp": [True], "lift": [True]}},
-    ]  # fmt: skip
+        {
+            "category": "pen",
+            "original": {"grasps": 2, "epsilon": [0.2, 0.4], "on_grasp": [True, False], "lift": [True]},
+            "affordance": {"grasps": 0, "epsilon": [], "on_grasp": [], "lift": []},
+        },
+        {
+            "category": "pen",
+            "original": {"grasps": 1, "epsilon": [0.1], "on_grasp": [True], "lift": [False]},
+            "affordance": {"grasps": 1, "epsilon": [0.5], "on_grasp": [True], "lift": [True]},
+        },
+    ]
     s = summarise(objects)["categories"]["pen"]
     assert abs(s["original"]["epsilon"] - (0.3 + 0.1) / 2) < 1e-12
     assert abs(s["affordance"]["epsilon"] - 0.25) < 1e-12

@@ -14,9 +14,25 @@ def test_a_dataset_without_training_objects_is_one_line_naming_the_bank(trained_
     index = json.loads((data / "dataset.json").read_text())
     index["objects"] = [o for o in index["objects"] if o["split"] != "train"]  # e.g. imported test objects only
     (data / "dataset.json").write_text(json.dumps(index))
-    args = ["eval", "--run", str(trained_runs["affnerf"]), "--data", str(data), "--split", "test",
-            "--method", "retrieval", "--out", str(tmp_path / "eval"), "--target-views", "2", "--scale", "0.25",
-            "--device", "cpu"]  # fmt: skip
+    args = [
+        "eval",
+        "--run",
+        str(trained_runs["affnerf"]),
+        "--data",
+        str(data),
+        "--split",
+        "test",
+        "--method",
+        "retrieval",
+        "--out",
+        str(tmp_path / "eval"),
+        "--target-views",
+        "2",
+        "--scale",
+        "0.25",
+        "--device",
+        "cpu",
+    ]
     assert main(args) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err

@@ -13,14 +13,16 @@ from pybullet_utils.bullet_client import BulletClient
 from shapely.geometry import Polygon
 
 from affnerf.errors import AffnerfError
+from affnerf.grasp.convex import convex_parts
 from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
-from affnerf.grasp.physics import FINGER_LINKS, LiftConfig, add_gripper, add_object, convex_parts, lift_test
+from affnerf.grasp.physics import FINGER_LINKS, LiftConfig, add_gripper, add_object, lift_test
 
 X, Y, Z = np.eye(3)
 BOX = trimesh.creation.box(extents=[0.04, 0.04, 0.12])  # centred on the origin, long along z
 ROD = trimesh.creation.box(extents=[0.25, 0.02, 0.02])  # long along x
 L_SHAPE = trimesh.creation.extrude_polygon(
-    Polygon([(0, 0), (0.1, 0), (0.1, 0.03), (0.03, 0.03), (0.03, 0.1), (0, 0.1)]), 0.03)
+    Polygon([(0, 0), (0.1, 0), (0.1, 0.03), (0.03, 0.03), (0.03, 0.1), (0, 0.1)]), 0.03
+)
 
 
 @pytest.fixture
@@ -95,11 +97,14 @@ def test_non_convex_shape_decomposes_into_convex_parts_covering_it():
 
 
 def test_union_of_closed_parts_keeps_each_part():
-    cup = trimesh.util.concatenate([  # a base plate and a wall standing on it, overlapping
-        trimesh.creation.box(extents=[0.1, 0.1, 0.01]),
-        trimesh.creation.box(extents=[0.01, 0.1, 0.1], transform=trimesh.transformations.translation_matrix(
-            [0.045, 0.0, 0.05])),
-    ])
+    cup = trimesh.util.concatenate(
+        [  # a base plate and a wall standing on it, overlapping
+            trimesh.creation.box(extents=[0.1, 0.1, 0.01]),
+            trimesh.creation.box(
+                extents=[0.01, 0.1, 0.1], transform=trimesh.transformations.translation_matrix([0.045, 0.0, 0.05])
+            ),
+        ]
+    )
     parts = convex_parts(cup)
     assert len(parts) == 2
     np.testing.assert_allclose(trimesh.util.concatenate(parts).bounds, cup.bounds, atol=1e-9)
@@ -120,15 +125,17 @@ def test_flat_mesh_is_rejected():
 
 def test_collision_shape_is_the_decomposition_not_the_hull(client):
     obj = add_object(client, convex_parts(L_SHAPE), LiftConfig())
-    probe = client.createMultiBody(0.01, client.createCollisionShape(pybullet.GEOM_SPHERE, radius=0.005),
-                                   basePosition=[0.07, 0.07, 0.015])  # in the L's notch, inside its hull
+    probe = client.createMultiBody(
+        0.01, client.createCollisionShape(pybullet.GEOM_SPHERE, radius=0.005), basePosition=[0.07, 0.07, 0.015]
+    )  # in the L's notch, inside its hull
     distances = [p[8] for p in client.getClosestPoints(obj, probe, 0.1)]
     assert distances and min(distances) > 0.02
 
 
 def test_object_mass_inertia_and_friction_are_set_from_the_config(client):
-    config = LiftConfig(mass=0.37, object_friction=0.55, spinning_friction=0.003, rolling_friction=0.0002,
-                        restitution=0.1)
+    config = LiftConfig(
+        mass=0.37, object_friction=0.55, spinning_friction=0.003, rolling_friction=0.0002, restitution=0.1
+    )
     box = trimesh.creation.box(extents=[0.02, 0.04, 0.1])
     box.apply_translation([0.1, 0.2, 0.3])
     obj = add_object(client, convex_parts(box), config)
@@ -147,7 +154,9 @@ def test_gripper_links_match_the_gripper_boxes_and_config(client):
     config = LiftConfig(finger_friction=0.9, finger_mass=0.03, palm_mass=0.4, spinning_friction=0.004)
     grip = add_gripper(client, gripper, opening, np.eye(4), config)
     (c1, h1), (c2, h2), (cp, hp) = gripper.boxes(opening)
-    for link, (centre, half) in zip((FINGER_LINKS[0], FINGER_LINKS[1], -1), ((c1, h1), (c2, h2), (cp, hp))):
+    for link, (centre, half) in zip(
+        (FINGER_LINKS[0], FINGER_LINKS[1], -1), ((c1, h1), (c2, h2), (cp, hp)), strict=True
+    ):
         low, high = client.getAABB(grip, link)
         np.testing.assert_allclose(low, centre - half, atol=1e-6)
         np.testing.assert_allclose(high, centre + half, atol=1e-6)

@@ -11,9 +11,9 @@ import trimesh
 
 from affnerf.cli.main import main
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal
 from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
+from affnerf.grasp.target import GraspObject
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.objects.asset import merge_parts
 from affnerf.objects.registry import make_object, object_seed
@@ -58,15 +58,25 @@ def test_local_search_lowers_the_energy(screwdriver):
     surface, faces = screwdriver.sample_surface(1500, rng)
     normals = screwdriver.face_normals[faces]
     config = RefineConfig(steps=30)
-    args = (torch.tensor(surface, dtype=torch.float32), torch.tensor(normals, dtype=torch.float32),
-            torch.tensor(screwdriver.centroid, dtype=torch.float32), screwdriver.radius, gripper, config)  # fmt: skip
+    args = (
+        torch.tensor(surface, dtype=torch.float32),
+        torch.tensor(normals, dtype=torch.float32),
+        torch.tensor(screwdriver.centroid, dtype=torch.float32),
+        screwdriver.radius,
+        gripper,
+        config,
+    )
 
     def energy(c, a, r, w):
         t = [torch.tensor(np.asarray(x), dtype=torch.float32) for x in (c, a, r, w)]
         return grasp_energy(*t, *args).detach().numpy()
 
     before = energy(centres, axes, approach, widths)
-    after = energy(*refine_grasps(centres, axes, approach, widths, surface, normals, screwdriver.centroid, screwdriver.radius, gripper, config))
+    after = energy(
+        *refine_grasps(
+            centres, axes, approach, widths, surface, normals, screwdriver.centroid, screwdriver.radius, gripper, config
+        )
+    )
     assert np.median(after) < 0.5 * np.median(before)
 
 
@@ -82,14 +92,45 @@ def _write(path, mesh: trimesh.Trimesh, labels=True, poison=False):
 def test_cli_plans_and_scores(tmp_path, capsys):
     mesh = _write(tmp_path / "box.ply", trimesh.creation.box(extents=(0.04, 0.05, 0.12)))
     out = tmp_path / "g"
-    assert main(["grasp", "--mesh", str(mesh), "--affordance", "grasp", "--num", "4", "--refine-steps", "3", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "grasp",
+                "--mesh",
+                str(mesh),
+                "--affordance",
+                "grasp",
+                "--num",
+                "4",
+                "--refine-steps",
+                "3",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     data = json.loads((out / "grasps.json").read_text())
     assert len(data["grasps"]) == 4 and data["affordance"] == "grasp"
     g0 = data["grasps"][0]
     assert np.asarray(g0["pose"]).shape == (4, 4) and len(g0["contacts"]) == 2 and g0["affordance"] == ["grasp"] * 2
     assert (out / "grasps.glb").stat().st_size > 0 and (out / "grasps.png").stat().st_size > 0
     capsys.readouterr()
-    assert main(["grasp", "score", "--mesh", str(mesh), "--grasps", str(out / "grasps.json"), "--out", str(tmp_path / "s.json")]) == 0
+    assert (
+        main(
+            [
+                "grasp",
+                "score",
+                "--mesh",
+                str(mesh),
+                "--grasps",
+                str(out / "grasps.json"),
+                "--out",
+                str(tmp_path / "s.json"),
+            ]
+        )
+        == 0
+    )
     scores = json.loads((tmp_path / "s.json").read_text())["scores"]
     assert scores[0]["epsilon"] == pytest.approx(g0["epsilon"], rel=1e-3)  # the file rounds poses to micrometres
     assert scores[0]["affordance"] == ["grasp", "grasp"]
@@ -112,8 +153,10 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, case, expected):
     box = trimesh.creation.box(extents=(0.04, 0.05, 0.12))
     path = tmp_path / "box.ply"
     if case == "empty":
-        path.write_text("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
-                        "element face 0\nproperty list uchar int vertex_indices\nend_header\n")  # fmt: skip
+        path.write_text(
+            "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 0\nproperty list uchar int vertex_indices\nend_header\n"
+        )
     else:
         _write(path, box, labels=case != "unlabelled", poison=case == "nonfinite")
     if case in ("bad_grasps", "nan_pose"):
@@ -121,7 +164,9 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, case, expected):
         pose = np.eye(4).tolist()
         if case == "nan_pose":
             pose[0][3] = float("nan")
-        grasps.write_text(json.dumps({"grasps": [{"pose": pose, "width": 0.04} if case == "nan_pose" else {"width": 1}]}))
+        grasps.write_text(
+            json.dumps({"grasps": [{"pose": pose, "width": 0.04} if case == "nan_pose" else {"width": 1}]})
+        )
         code = main(["grasp", "score", "--mesh", str(path), "--grasps", str(grasps)])
     else:
         code = main(["grasp", "--mesh", str(path), "--affordance", "grasp", "--out", str(tmp_path / "o")])

@@ -10,9 +10,9 @@ import trimesh
 from scipy.optimize import minimize
 
 from affnerf.grasp.gripper import grasp_pose
-from affnerf.grasp.target import GraspObject
 from affnerf.grasp.quality import contact_wrenches, ferrari_canny, friction_cone, hull_margin
 from affnerf.grasp.scoring import score_grasps
+from affnerf.grasp.target import GraspObject
 
 
 def _box(extents=(0.04, 0.04, 0.12)) -> GraspObject:
@@ -90,8 +90,10 @@ def test_two_contact_case_by_hand():
         return (all_w @ (u / np.linalg.norm(u))).max()
 
     starts = np.random.default_rng(0).normal(size=(24, 6))
-    found = min(minimize(support, s0, method="Nelder-Mead", options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000}).fun
-                for s0 in starts)  # fmt: skip
+    found = min(
+        minimize(support, s0, method="Nelder-Mead", options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000}).fun
+        for s0 in starts
+    )
     assert eps == pytest.approx(found, rel=0.01)
     # the weakest direction is twisting about the grasp axis: the torsion bound gamma / r over a unit of force
     assert eps <= gamma / r

@@ -62,7 +62,9 @@ def test_object_only_variant_drops_background_pixels_and_class():
 
 def test_perfect_and_empty():
     perfect = np.diag([5, 3, 0])
-    assert segmentation_metrics(perfect) == {k: 1.0 for k in ("mIoU", "PA", "MPA", "mIoU_object", "PA_object", "MPA_object")}
+    assert segmentation_metrics(perfect) == {
+        k: 1.0 for k in ("mIoU", "PA", "MPA", "mIoU_object", "PA_object", "MPA_object")
+    }
     assert math.isnan(mean_iou(np.zeros((3, 3), int)))
 
 

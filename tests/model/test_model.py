@@ -14,8 +14,17 @@ from affnerf.model.encoding import encoding_dim, positional_encoding
 from affnerf.model.field import ConditionalField
 from affnerf.model.resnet import CodeEncoder, ResNet18
 
-SMALL = ModelConfig(encoder_width=0.125, encoder_resolution=32, field_width=32, field_depth=4, num_coarse=8, num_fine=8,
-                    clip_to_cube=True, color_width=16, affordance_width=16)  # fmt: skip
+SMALL = ModelConfig(
+    encoder_width=0.125,
+    encoder_resolution=32,
+    field_width=32,
+    field_depth=4,
+    num_coarse=8,
+    num_fine=8,
+    clip_to_cube=True,
+    color_width=16,
+    affordance_width=16,
+)
 
 
 def test_resnet18_has_the_standard_layout():
@@ -98,9 +107,7 @@ def test_every_config_kind_has_a_registered_model():
     from affnerf.model.registry import MODEL_KINDS, build_model, config_kinds
 
     assert set(config_kinds()) == set(MODEL_KINDS)
-    small = ModelConfig(encoder_width=0.125, encoder_resolution=32, field_width=16, field_depth=2, color_width=8,
-                        affordance_width=8, num_coarse=4, num_fine=0)  # fmt: skip
     for kind in config_kinds():
-        assert type(build_model(replace(small, kind=kind), 5)) is MODEL_KINDS[kind]
+        assert type(build_model(replace(SMALL, kind=kind), 5)) is MODEL_KINDS[kind]
     with pytest.raises(ValueError, match="unknown model kind 'nerfacto'"):
-        build_model(replace(small, kind="nerfacto"), 5)  # type: ignore[arg-type]
+        build_model(replace(SMALL, kind="nerfacto"), 5)  # type: ignore[arg-type]

@@ -69,7 +69,7 @@ def test_same_seed_same_object(objects):
     category, assets = objects
     again = make_object(category, object_seed(0, category, 0))
     assert [p.name for p in again.parts] == [p.name for p in assets[0].parts]
-    for a, b in zip(again.parts, assets[0].parts):
+    for a, b in zip(again.parts, assets[0].parts, strict=True):
         np.testing.assert_array_equal(a.mesh.vertices, b.mesh.vertices)
         assert a.materials == b.materials
 

@@ -50,7 +50,9 @@ def test_tube_along_a_curve_and_a_closed_loop():
 
 def test_sweep_with_tapering_section_and_mirror_stays_oriented():
     path = np.stack([np.zeros(10), np.zeros(10), np.linspace(0, 0.1, 10)], 1)
-    wedge = P.sweep(path, P.superellipse(1, 1, 8), scales=np.stack([np.full(10, 0.01), np.linspace(0.01, 0.002, 10)], 1))
+    wedge = P.sweep(
+        path, P.superellipse(1, 1, 8), scales=np.stack([np.full(10, 0.01), np.linspace(0.01, 0.002, 10)], 1)
+    )
     assert _closed(wedge)
     mirrored = P.placed(wedge, np.diag([-1.0, 1.0, 1.0, 1.0]))
     assert _closed(mirrored)

@@ -12,8 +12,11 @@ from affnerf.vocab import AFFORDANCE_PALETTE
 
 def _box_mesh(label: int) -> LabelledMesh:
     box = trimesh.creation.box((0.1, 0.1, 0.1))
-    return LabelledMesh(np.asarray(box.vertices), np.asarray(box.faces),
-                        face_props={"affordance": np.full(len(box.faces), label, np.uint8)})  # fmt: skip
+    return LabelledMesh(
+        np.asarray(box.vertices),
+        np.asarray(box.faces),
+        face_props={"affordance": np.full(len(box.faces), label, np.uint8)},
+    )
 
 
 def test_mesh_preview_shows_the_class_colour_on_white():

@@ -17,7 +17,9 @@ def _sphere(radius: float, sharpness: float = 0.01):
 def test_sphere_field_gives_the_sphere_within_a_voxel():
     resolution = 64
     voxel = 0.5 / (resolution - 1)
-    mesh = extract_labelled_mesh(_sphere(0.15), lambda p: torch.where(p[:, 2] > 0, 1, 7), resolution, level=50.0, half_extent=0.25)
+    mesh = extract_labelled_mesh(
+        _sphere(0.15), lambda p: torch.where(p[:, 2] > 0, 1, 7), resolution, level=50.0, half_extent=0.25
+    )
     radius = np.linalg.norm(mesh.vertices, axis=1)
     assert np.abs(radius - 0.15).max() < voxel
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces)

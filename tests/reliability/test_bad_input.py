@@ -17,7 +17,11 @@ from affnerf.cli.main import main
 
 
 def _tree_digest(root: Path) -> dict[str, str]:
-    return {p.relative_to(root).as_posix(): hashlib.sha1(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+    return {
+        p.relative_to(root).as_posix(): hashlib.sha1(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 def _fails_cleanly(capsys, args: list[str], pattern: str) -> str:
@@ -38,9 +42,35 @@ def dataset_copy(train_dataset, tmp_path) -> Path:
 
 
 def _train_args(data: Path, out: Path, *extra: str) -> list[str]:
-    return ["train", "--data", str(data), "--out", str(out), "--config", "small", "--image-scale", "1.0", "--steps", "2", "--val-every", "0",
-            "--no-progress", "--device", "cpu", "--model.encoder-width", "0.125", "--model.encoder-resolution", "32",
-            "--model.field-width", "16", "--model.field-depth", "2", "--rays-per-step", "32", *extra]  # fmt: skip
+    return [
+        "train",
+        "--data",
+        str(data),
+        "--out",
+        str(out),
+        "--config",
+        "small",
+        "--image-scale",
+        "1.0",
+        "--steps",
+        "2",
+        "--val-every",
+        "0",
+        "--no-progress",
+        "--device",
+        "cpu",
+        "--model.encoder-width",
+        "0.125",
+        "--model.encoder-resolution",
+        "32",
+        "--model.field-width",
+        "16",
+        "--model.field-depth",
+        "2",
+        "--rays-per-step",
+        "32",
+        *extra,
+    ]
 
 
 def _first_train_object(root: Path) -> Path:
@@ -106,7 +136,9 @@ def test_training_on_bad_data(dataset_copy, tmp_path, capsys, damage, pattern):
     elif damage == "unknown_category":
         extra = ["--categories", "spoon"]
     before = _tree_digest(dataset_copy)
-    _fails_cleanly(capsys, _train_args(dataset_copy, tmp_path / "run", "--cache-dir", str(tmp_path / "cache"), *extra), pattern)
+    _fails_cleanly(
+        capsys, _train_args(dataset_copy, tmp_path / "run", "--cache-dir", str(tmp_path / "cache"), *extra), pattern
+    )
     assert _tree_digest(dataset_copy) == before  # the dataset is untouched
     assert not (tmp_path / "run" / "checkpoints").exists()
 
@@ -142,8 +174,20 @@ def test_checkpoint_of_another_class_count_is_refused(trained_runs, dataset_copy
     shutil.copytree(trained_runs["affnerf"], run)
     config = json.loads((run / "config.json").read_text())
     m = config["model"]
-    args = ["train", "--config-file", str(run / "config.json"), "--data", str(dataset_copy), "--out", str(run),
-            "--resume", "--steps", "40", "--cache-dir", str(tmp_path / "cache")]  # fmt: skip
+    args = [
+        "train",
+        "--config-file",
+        str(run / "config.json"),
+        "--data",
+        str(dataset_copy),
+        "--out",
+        str(run),
+        "--resume",
+        "--steps",
+        "40",
+        "--cache-dir",
+        str(tmp_path / "cache"),
+    ]
     before = _tree_digest(run / "checkpoints")
     _fails_cleanly(capsys, args, r"step_00000030\.pt: checkpoint has 12 affordance classes, the dataset 13")
     assert _tree_digest(run / "checkpoints") == before

@@ -13,8 +13,19 @@ def test_same_seed_same_bytes(tmp_path):
     trees = []
     for name in ("a", "b"):
         root = tmp_path / name
-        generate_dataset(GenerateConfig(out=root, categories="cabinet,teapot", objects_per_category=2, views=3,
-                                        width=48, height=36, seed=11, workers=2 if name == "b" else 1), progress=False)  # fmt: skip
+        generate_dataset(
+            GenerateConfig(
+                out=root,
+                categories="cabinet,teapot",
+                objects_per_category=2,
+                views=3,
+                width=48,
+                height=36,
+                seed=11,
+                workers=2 if name == "b" else 1,
+            ),
+            progress=False,
+        )
         trees.append(root)
     files = sorted(p.relative_to(trees[0]) for p in trees[0].rglob("*") if p.is_file() and p.name != ".dataset.lock")
     assert len(files) > 20
@@ -26,5 +37,7 @@ def test_same_seed_same_losses(tiny_train_config, tmp_path):
     runs = [tiny_train_config(out=tmp_path / name, steps=15) for name in ("a", "b")]
     for config in runs:
         train(config)
-    losses = [[json.loads(line)["loss/total"] for line in (c.out / "metrics.jsonl").read_text().splitlines()] for c in runs]
+    losses = [
+        [json.loads(line)["loss/total"] for line in (c.out / "metrics.jsonl").read_text().splitlines()] for c in runs
+    ]
     assert len(losses[0]) == 15 and losses[0] == losses[1]

@@ -12,15 +12,36 @@ from scipy.spatial.transform import Rotation
 
 from affnerf.data.format import check_pose, parse_index, parse_transforms
 from affnerf.errors import AffnerfError
-from affnerf.metrics.segmentation import confusion_matrix, mean_iou, mean_pixel_accuracy, pixel_accuracy, segmentation_metrics
+from affnerf.metrics.segmentation import (
+    confusion_matrix,
+    mean_iou,
+    mean_pixel_accuracy,
+    pixel_accuracy,
+    segmentation_metrics,
+)
 
 JSONISH = st.recursive(
     st.none() | st.booleans() | st.integers(-5, 300) | st.floats(allow_nan=True) | st.text(max_size=6),
     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=12), inner, max_size=5),
     max_leaves=20,
 )
-KEYS = ["object_id", "category", "w", "h", "fl_x", "fl_y", "cx", "cy", "frames", "parts", "affordance_classes",
-        "background_color", "depth_unit_scale_factor", "format", "objects"]  # fmt: skip
+KEYS = [
+    "object_id",
+    "category",
+    "w",
+    "h",
+    "fl_x",
+    "fl_y",
+    "cx",
+    "cy",
+    "frames",
+    "parts",
+    "affordance_classes",
+    "background_color",
+    "depth_unit_scale_factor",
+    "format",
+    "objects",
+]
 
 
 @settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow], deadline=None)

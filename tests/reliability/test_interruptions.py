@@ -37,14 +37,55 @@ def _kill_when(proc: subprocess.Popen, ready, timeout: float = 120.0) -> None:
 
 def _train_cli(config, out: Path, steps: int, *extra: str) -> list[str]:
     m = config.model
-    return _cli("train", "--data", str(config.data), "--out", str(out), "--config", "small", "--image-scale", "1.0", "--steps", str(steps),
-                "--checkpoint-every", "5", "--log-every", "1", "--val-every", "0", "--no-progress", "--device", "cpu",
-                "--cache-dir", str(config.cache_dir), "--rays-per-step", str(config.rays_per_step),
-                "--objects-per-step", str(config.objects_per_step), "--model.encoder-width", str(m.encoder_width),
-                "--model.encoder-resolution", str(m.encoder_resolution), "--model.field-width", str(m.field_width),
-                "--model.field-depth", str(m.field_depth), "--model.num-coarse", str(m.num_coarse),
-                "--model.num-fine", str(m.num_fine), "--model.pe-xyz", str(m.pe_xyz), "--model.pe-dir", str(m.pe_dir),
-                "--model.color-width", str(m.color_width), "--model.affordance-width", str(m.affordance_width), *extra)  # fmt: skip
+    return _cli(
+        "train",
+        "--data",
+        str(config.data),
+        "--out",
+        str(out),
+        "--config",
+        "small",
+        "--image-scale",
+        "1.0",
+        "--steps",
+        str(steps),
+        "--checkpoint-every",
+        "5",
+        "--log-every",
+        "1",
+        "--val-every",
+        "0",
+        "--no-progress",
+        "--device",
+        "cpu",
+        "--cache-dir",
+        str(config.cache_dir),
+        "--rays-per-step",
+        str(config.rays_per_step),
+        "--objects-per-step",
+        str(config.objects_per_step),
+        "--model.encoder-width",
+        str(m.encoder_width),
+        "--model.encoder-resolution",
+        str(m.encoder_resolution),
+        "--model.field-width",
+        str(m.field_width),
+        "--model.field-depth",
+        str(m.field_depth),
+        "--model.num-coarse",
+        str(m.num_coarse),
+        "--model.num-fine",
+        str(m.num_fine),
+        "--model.pe-xyz",
+        str(m.pe_xyz),
+        "--model.pe-dir",
+        str(m.pe_dir),
+        "--model.color-width",
+        str(m.color_width),
+        "--model.affordance-width",
+        str(m.affordance_width),
+        *extra,
+    )
 
 
 def test_sigkill_during_training_then_resume_gives_the_uninterrupted_weights(tiny_train_config, tmp_path):
@@ -64,10 +105,29 @@ def test_sigkill_during_training_then_resume_gives_the_uninterrupted_weights(tin
 
 def test_sigkill_during_generation_then_rerun_completes_with_whole_objects(tmp_path):
     out = tmp_path / "ds"
-    args = _cli("data", "generate", "--out", str(out), "--categories", "screwdriver,pen", "--objects-per-category", "4",
-                "--views", "12", "--width", "64", "--height", "48", "--workers", "2")  # fmt: skip
+    args = _cli(
+        "data",
+        "generate",
+        "--out",
+        str(out),
+        "--categories",
+        "screwdriver,pen",
+        "--objects-per-category",
+        "4",
+        "--views",
+        "12",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--workers",
+        "2",
+    )
     proc = subprocess.Popen(args, start_new_session=True, stderr=subprocess.DEVNULL)
-    _kill_when(proc, lambda: (out / "dataset.json").exists() and len(json.loads((out / "dataset.json").read_text())["objects"]) >= 2)
+    _kill_when(
+        proc,
+        lambda: (out / "dataset.json").exists() and len(json.loads((out / "dataset.json").read_text())["objects"]) >= 2,
+    )
     listed = {o["id"] for o in json.loads((out / "dataset.json").read_text())["objects"]}
     assert len(listed) < 8
     for oid in listed:  # whatever is listed is whole
@@ -87,7 +147,9 @@ def test_sigkill_during_import_then_rerun(tmp_path):
 
     sources = [str(write_partnet_fixture(tmp_path / f"toy{i}")) for i in range(3)]
     out = tmp_path / "ds"
-    args = _cli("data", "import-partnet", *sources, "--out", str(out), "--views", "40", "--width", "120", "--height", "90")
+    args = _cli(
+        "data", "import-partnet", *sources, "--out", str(out), "--views", "40", "--width", "120", "--height", "90"
+    )
     proc = subprocess.Popen(args, start_new_session=True, stderr=subprocess.DEVNULL)
     _kill_when(proc, lambda: (out / "dataset.json").exists())
     subprocess.run(args, check=True, timeout=300, stderr=subprocess.DEVNULL)
@@ -131,7 +193,9 @@ def test_failed_frame_write_leaves_the_dataset_as_it_was(tmp_path, monkeypatch):
 
     with pytest.raises(OSError):
         generate_dataset(replace(config, categories="pen,screwdriver"), progress=False)
-    assert (out / "dataset.json").read_bytes() == index or {o["id"] for o in json.loads((out / "dataset.json").read_text())["objects"]} == {"pen_0000", "pen_0001"}
+    assert (out / "dataset.json").read_bytes() == index or {
+        o["id"] for o in json.loads((out / "dataset.json").read_text())["objects"]
+    } == {"pen_0000", "pen_0001"}
     assert not any((out / ".partial").iterdir())
     assert not (out / "screwdriver").exists() or not any((out / "screwdriver").iterdir())
     with pytest.raises(AffnerfError):  # and the other settings are still refused, so nothing was overwritten

@@ -21,7 +21,11 @@ def test_grid_marks_the_ball_and_dilation_grows_it():
     assert abs(share - (4 / 3 * math.pi * 0.1**3) / 0.5**3) < 0.01
     grown = build_grid(_ball(0.1), 0.25, resolution=50, dilation=1)
     assert grown.occupied.sum() > grid.occupied.sum() and bool((grown.occupied | ~grid.occupied).all())
-    assert grid.lookup(torch.tensor([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.0, 0.0, 0.9]])).tolist() == [True, False, False]
+    assert grid.lookup(torch.tensor([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.0, 0.0, 0.9]])).tolist() == [
+        True,
+        False,
+        False,
+    ]
 
 
 def test_samples_fall_in_occupied_cells_and_stand_for_the_occupied_length():

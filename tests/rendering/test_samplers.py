@@ -39,4 +39,6 @@ def test_pdf_samples_of_an_empty_ray_are_uniform():
 
 
 def test_merge_sorts_the_union():
-    torch.testing.assert_close(merge_samples(torch.tensor([[0.1, 0.5]]), torch.tensor([[0.3]])), torch.tensor([[0.1, 0.3, 0.5]]))
+    torch.testing.assert_close(
+        merge_samples(torch.tensor([[0.1, 0.5]]), torch.tensor([[0.3]])), torch.tensor([[0.1, 0.3, 0.5]])
+    )

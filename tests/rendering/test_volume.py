@@ -39,7 +39,9 @@ def test_uniform_medium_matches_the_closed_form():
     # a constant colour in the medium blends with the background by the transmittance
     rgb = accumulate(w, torch.full((1, n, 3), 0.2, dtype=torch.float64))
     out = composite(rgb, w.sum(-1), torch.tensor([1.0, 1.0, 1.0], dtype=torch.float64))
-    torch.testing.assert_close(out[0], torch.full((3,), 0.2 * (1 - math.exp(-1.2)) + math.exp(-1.2), dtype=torch.float64))
+    torch.testing.assert_close(
+        out[0], torch.full((3,), 0.2 * (1 - math.exp(-1.2)) + math.exp(-1.2), dtype=torch.float64)
+    )
 
 
 def test_empty_rays_render_background_and_background_class():

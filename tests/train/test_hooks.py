@@ -54,9 +54,16 @@ def test_log_scalars_writes_lines_and_replaces_the_run_scalars(tmp_path):
     rows = [json.loads(line) for line in (tmp_path / "metrics.jsonl").read_text().splitlines()]
     assert [r["step"] for r in rows] == [2, 3]
     assert list(rows[0]) == [
-        "step", "loss/total", "loss/mse", "loss/affordance_ce", "train/psnr", "train/affordance_accuracy", "train/lr",
-        "perf/rays_per_second", "time/seconds",
-    ]  # fmt: skip
+        "step",
+        "loss/total",
+        "loss/mse",
+        "loss/affordance_ce",
+        "train/psnr",
+        "train/affordance_accuracy",
+        "train/lr",
+        "perf/rays_per_second",
+        "time/seconds",
+    ]
     assert abs(rows[1]["loss/total"] - 1 / 3) < 1e-6 and abs(scalars["train/psnr"] - 30.0) < 1e-3
     assert rows[0]["train/lr"] == 1e-3 and bar.n == 3
     assert (tmp_path / "tb").is_dir()

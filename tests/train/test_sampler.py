@@ -47,9 +47,18 @@ def test_rays_match_the_cached_pixels_and_foreground_share(train_dataset, tmp_pa
 def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
     labels = np.zeros((2, 5, 7), np.uint8)
     labels[1, 2, 3] = 4
-    frames = ObjectFrames("toy", np.zeros((2, 5, 7, 3), np.uint8), labels, np.zeros((2, 4, 4, 3), np.uint8),
-                          np.zeros((2, 4)), np.array([0, 0, 1]), np.array([2 * 7 + 3], np.int32),
-                          np.tile(np.eye(4), (2, 1, 1)), np.ones(4), np.ones(3))  # fmt: skip
+    frames = ObjectFrames(
+        "toy",
+        np.zeros((2, 5, 7, 3), np.uint8),
+        labels,
+        np.zeros((2, 4, 4, 3), np.uint8),
+        np.zeros((2, 4)),
+        np.array([0, 0, 1]),
+        np.array([2 * 7 + 3], np.int32),
+        np.tile(np.eye(4), (2, 1, 1)),
+        np.ones(4),
+        np.ones(3),
+    )
     rng = np.random.default_rng(0)
     u, v = draw_pixels(rng, frames, np.array([0, 1, 1, 1]), np.array([True, True, True, False]))
     assert (u[1], v[1]) == (3, 2) and (u[2], v[2]) == (3, 2)

@@ -10,14 +10,14 @@ import pytest
 import torch
 
 from affnerf.cli.main import main
+from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.affnerf import AffNeRF
+from affnerf.train import distributed as dist_utils
 from affnerf.train.cache import cached_frames
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
-from affnerf.train import distributed as dist_utils
 from affnerf.train.trainer import Trainer, learning_rate, train
-from affnerf.data.dataset import Dataset
 
 
 def _metrics(run):
@@ -33,17 +33,29 @@ def test_one_step_changes_every_parameter_group(train_dataset, tmp_path, tiny_tr
     before = {k: v.detach().clone() for k, v in model.named_parameters()}
     opt = torch.optim.Adam(model.parameters(), lr=1e-3)
     batch = RaySampler(frames, 2, 256, 0.5, seed=0).next_batch()
-    coarse, fine = model(batch.images, batch.input_intrinsics, batch.input_poses, batch.ray_object, batch.origins,
-                         batch.dirs, batch.background)  # fmt: skip
+    coarse, fine = model(
+        batch.images,
+        batch.input_intrinsics,
+        batch.input_poses,
+        batch.ray_object,
+        batch.origins,
+        batch.dirs,
+        batch.background,
+    )
     nerf_loss(coarse, fine, batch.rgb, batch.labels, 0.04).total.backward()
     opt.step()
     groups = {}
     for name, param in model.named_parameters():
-        group = ".".join(name.split(".")[:2 if name.startswith(("shape", "appearance")) else 3])
+        group = ".".join(name.split(".")[: 2 if name.startswith(("shape", "appearance")) else 3])
         groups.setdefault(group, []).append(not torch.equal(param, before[name]))
     unchanged = [g for g, changed in groups.items() if not all(changed)]
     assert not unchanged, unchanged
-    assert {"shape_encoder.backbone", "appearance_encoder.head", "renderer.coarse.affordance", "renderer.fine.color"} <= set(groups)
+    assert {
+        "shape_encoder.backbone",
+        "appearance_encoder.head",
+        "renderer.coarse.affordance",
+        "renderer.fine.color",
+    } <= set(groups)
 
 
 def test_fifty_steps_reduce_both_losses(tiny_train_config):
@@ -102,13 +114,48 @@ def test_existing_run_needs_resume_and_keeps_its_checkpoints(tiny_train_config):
 
 def _cli(config, *extra):
     return [
-        "train", "--data", str(config.data), "--out", str(config.out), "--config", "small", "--image-scale", "1.0", "--steps", "10",
-        "--model.encoder-width", "0.125", "--model.encoder-resolution", "32", "--model.field-width", "32",
-        "--model.field-depth", "2", "--model.color-width", "16", "--model.affordance-width", "16",
-        "--model.num-coarse", "8", "--model.num-fine", "8", "--rays-per-step", "64", "--objects-per-step", "2",
-        "--checkpoint-every", "5", "--val-every", "0", "--no-progress", "--device", "cpu",
-        "--cache-dir", str(config.cache_dir), *extra,
-    ]  # fmt: skip
+        "train",
+        "--data",
+        str(config.data),
+        "--out",
+        str(config.out),
+        "--config",
+        "small",
+        "--image-scale",
+        "1.0",
+        "--steps",
+        "10",
+        "--model.encoder-width",
+        "0.125",
+        "--model.encoder-resolution",
+        "32",
+        "--model.field-width",
+        "32",
+        "--model.field-depth",
+        "2",
+        "--model.color-width",
+        "16",
+        "--model.affordance-width",
+        "16",
+        "--model.num-coarse",
+        "8",
+        "--model.num-fine",
+        "8",
+        "--rays-per-step",
+        "64",
+        "--objects-per-step",
+        "2",
+        "--checkpoint-every",
+        "5",
+        "--val-every",
+        "0",
+        "--no-progress",
+        "--device",
+        "cpu",
+        "--cache-dir",
+        str(config.cache_dir),
+        *extra,
+    ]
 
 
 def test_checkpoint_of_another_configuration_is_a_clear_error(tiny_train_config, capsys):

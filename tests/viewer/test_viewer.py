@@ -32,21 +32,39 @@ def write_prediction_folder(out: Path) -> Path:
     vertex_labels = np.where(sphere.vertices[:, 2] > 0, GRASP, CUT).astype(np.uint8)
     face_labels = np.where(sphere.triangles_center[:, 2] > 0, GRASP, CUT).astype(np.uint8)
     mesh = LabelledMesh(
-        np.asarray(sphere.vertices), np.asarray(sphere.faces), {"affordance": vertex_labels},
-        {"affordance": face_labels}, colorize_labels(vertex_labels),
-    )  # fmt: skip
+        np.asarray(sphere.vertices),
+        np.asarray(sphere.faces),
+        {"affordance": vertex_labels},
+        {"affordance": face_labels},
+        colorize_labels(vertex_labels),
+    )
     write_labelled_ply(out / "affordance_model.ply", mesh)
     top = grasp_pose(np.array([0.0, 0.0, 0.05]), np.array([1.0, 0, 0]), np.array([0, 0, -1.0]))
     side = grasp_pose(np.zeros(3), np.array([0, 0, 1.0]), np.array([0, 1.0, 0]))
     grasps = [
-        {"pose": top.tolist(), "width": 0.06, "contacts": [[-0.03, 0, 0.05], [0.03, 0, 0.05]], "epsilon": 0.02,
-         "affordance": ["grasp", "grasp"]},
-        {"pose": side.tolist(), "width": 0.07, "contacts": [[0, 0, -0.035], [0, 0, 0.035]], "epsilon": 0.01,
-         "affordance": ["cut", "grasp"]},
-    ]  # fmt: skip
+        {
+            "pose": top.tolist(),
+            "width": 0.06,
+            "contacts": [[-0.03, 0, 0.05], [0.03, 0, 0.05]],
+            "epsilon": 0.02,
+            "affordance": ["grasp", "grasp"],
+        },
+        {
+            "pose": side.tolist(),
+            "width": 0.07,
+            "contacts": [[0, 0, -0.035], [0, 0, 0.035]],
+            "epsilon": 0.01,
+            "affordance": ["cut", "grasp"],
+        },
+    ]
     (out / "grasps").mkdir(exist_ok=True)
-    payload = {"format": "affnerf-grasps-1", "mesh": str(out / "affordance_model.ply"), "affordance": "grasp",
-               "gripper": {"type": "parallel", **ParallelJawGripper().__dict__}, "grasps": grasps}  # fmt: skip
+    payload = {
+        "format": "affnerf-grasps-1",
+        "mesh": str(out / "affordance_model.ply"),
+        "affordance": "grasp",
+        "gripper": {"type": "parallel", **ParallelJawGripper().__dict__},
+        "grasps": grasps,
+    }
     (out / "grasps" / "grasps.json").write_text(json.dumps(payload))
     image = np.full((96, 128, 3), 240, np.uint8)
     image[24:72, 40:88] = AFFORDANCE_PALETTE[GRASP]

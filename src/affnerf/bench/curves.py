@@ -36,15 +36,22 @@ def step_seconds(config: TrainConfig, frames: list[ObjectFrames], steps: int = 4
     torch.manual_seed(0)
     model = build_model(config.model, 12)
     optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
-    sampler = RaySampler(frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, 0,
-                         input_views=config.input_views)  # fmt: skip
+    sampler = RaySampler(
+        frames,
+        config.objects_per_step,
+        config.rays_per_step,
+        config.foreground_fraction,
+        0,
+        input_views=config.input_views,
+    )
     generator = torch.Generator().manual_seed(0)
     times = []
     for i in range(warmup + steps):
         start = time.perf_counter()
         b = sampler.next_batch()
-        coarse, fine = model(b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background,
-                             True, generator)  # fmt: skip
+        coarse, fine = model(
+            b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background, True, generator
+        )
         loss = nerf_loss(coarse, fine, b.rgb, b.labels, config.affordance_weight).total
         optimizer.zero_grad()
         loss.backward()
@@ -71,9 +78,21 @@ def measure_curve(config: TrainConfig, minutes: float, chunks: int, seconds_per_
         stop = round(steps * chunk / chunks)
         summary = train(replace(config, resume=chunk > 1, stop_at=stop))
         m = score_run(config.out, config.data)
-        curve.append({"train_seconds": round(stop * seconds_per_step, 1), "step": summary.step,
-                      "loss": summary.scalars.get("loss/total"), "val_mIoU": m["mIoU"], "val_MPA": m["MPA"],
-                      "val_PSNR": m["PSNR"]})  # fmt: skip
+        curve.append(
+            {
+                "train_seconds": round(stop * seconds_per_step, 1),
+                "step": summary.step,
+                "loss": summary.scalars.get("loss/total"),
+                "val_mIoU": m["mIoU"],
+                "val_MPA": m["MPA"],
+                "val_PSNR": m["PSNR"],
+            }
+        )
         print(f"{config.out.name} chunk {chunk}/{chunks}: {curve[-1]}", flush=True)
-    return {"seconds_per_step": seconds_per_step, "steps": steps, "rays_per_second": config.rays_per_step / seconds_per_step,
-            "config": config_to_json(config), "curve": curve}  # fmt: skip
+    return {
+        "seconds_per_step": seconds_per_step,
+        "steps": steps,
+        "rays_per_second": config.rays_per_step / seconds_per_step,
+        "config": config_to_json(config),
+        "curve": curve,
+    }

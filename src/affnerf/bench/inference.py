@@ -12,7 +12,6 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-import torch
 
 from affnerf.bench.timing import timed
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
@@ -33,9 +32,14 @@ def _reference(loaded: LoadedModel, chunk: int) -> Predictor:
 
 
 def measure_inference(
-    loaded: LoadedModel, crop: np.ndarray, repeats: int, views: int = 20, size: tuple[int, int] = (400, 300),
-    resolution: int = 128, chunk: int | None = None,
-) -> dict[str, Any]:  # fmt: skip
+    loaded: LoadedModel,
+    crop: np.ndarray,
+    repeats: int,
+    views: int = 20,
+    size: tuple[int, int] = (400, 300),
+    resolution: int = 128,
+    chunk: int | None = None,
+) -> dict[str, Any]:
     """Latencies (seconds, median/min/max) of the fast and the reference path, and their ratios.
 
     Args:
@@ -69,8 +73,10 @@ def measure_inference(
 
 def _fast_vs_reference(fast: Any, reference: Any, repeats: int, device: Any) -> dict[str, Any]:
     """Timings of two callables (the reference repeated half as often, without warm-up) and the speed-up."""
-    out = {"fast": timed(fast, repeats, device=device),
-           "reference": timed(reference, max(1, repeats // 2), warmup=0, device=device)}  # fmt: skip
+    out = {
+        "fast": timed(fast, repeats, device=device),
+        "reference": timed(reference, max(1, repeats // 2), warmup=0, device=device),
+    }
     out["speedup"] = out["reference"]["median"] / out["fast"]["median"]
     return out
 
@@ -91,7 +97,9 @@ def _view_latency(
     return out
 
 
-def _mesh_latency(fast: Predictor, reference: Predictor, crop: np.ndarray, resolution: int, repeats: int) -> dict[str, Any]:
+def _mesh_latency(
+    fast: Predictor, reference: Predictor, crop: np.ndarray, resolution: int, repeats: int
+) -> dict[str, Any]:
     """Image -> labelled mesh, fast vs reference, and the faces each gives."""
 
     def mesh(predictor: Predictor) -> Any:

@@ -56,12 +56,17 @@ def run_suite(config: BenchConfig) -> dict[str, Any]:
     device = pick_device(config.device)
     quick = config.quick
     repeats = 3 if quick else config.repeats
-    result: dict[str, Any] = {"benchmark": "affnerf", "quick": quick, "machine": describe_machine(),
-                              "settings": {k: str(v) for k, v in asdict(config).items()}}  # fmt: skip
+    result: dict[str, Any] = {
+        "benchmark": "affnerf",
+        "quick": quick,
+        "machine": describe_machine(),
+        "settings": {k: str(v) for k, v in asdict(config).items()},
+    }
     work = Path(tempfile.mkdtemp(prefix="affnerf-bench-"))
     try:
-        data_cfg = DataBenchConfig(workers=2, objects_per_category=1 if quick else 2, views=8 if quick else 30,
-                                   repeats=1 if quick else 3)  # fmt: skip
+        data_cfg = DataBenchConfig(
+            workers=2, objects_per_category=1 if quick else 2, views=8 if quick else 30, repeats=1 if quick else 3
+        )
         result["data_generation"] = {**measure_generation(data_cfg, work), "config": asdict(data_cfg)}
         root = work / "ds"
         generate_dataset(GenerateConfig(out=root, objects_per_category=1, views=6, workers=2, seed=1), progress=False)
@@ -72,8 +77,10 @@ def run_suite(config: BenchConfig) -> dict[str, Any]:
                 preset = replace(preset, rays_per_step=256)
             frames = _frames(root, preset.model.encoder_resolution, work / f"cache-{name}")
             steps = (3 if quick else 10) if name == "paper" and device.type == "cpu" else (5 if quick else 20)
-            result["training"][name] = {**compare_training(preset, frames, steps, device),
-                                        "rays_per_step": preset.rays_per_step}  # fmt: skip
+            result["training"][name] = {
+                **compare_training(preset, frames, steps, device),
+                "rays_per_step": preset.rays_per_step,
+            }
         result["inference"] = _inference(config, root, device, repeats, quick)
         result["memory"] = peak_memory(device)
     finally:
@@ -94,23 +101,36 @@ def _inference(config: BenchConfig, root: Path, device: torch.device, repeats: i
     return {"model": str(loaded.path), **measure_inference(loaded, crop, repeats, views, size, 128)}
 
 
+def _fast_vs_reference(timing: dict[str, Any]) -> str:
+    """``fast 1.73 s, reference 15.10 s: x8.8`` from a timing with fast/reference medians and a speed-up."""
+    return (
+        f"fast {timing['fast']['median']:.2f} s, reference {timing['reference']['median']:.2f} s: "
+        f"x{timing['speedup']:.1f}"
+    )
+
+
 def results_table(result: dict[str, Any]) -> str:
     """The main figures as a plain-text table."""
-    lines = [f"device: {result['machine'].get('device')}, torch {result['machine'].get('torch')}, quick={result['quick']}"]
+    lines = [
+        f"device: {result['machine'].get('device')}, torch {result['machine'].get('torch')}, quick={result['quick']}"
+    ]
     d = result["data_generation"]
     lines.append(f"dataset rendering: {d['median']:.1f} frames/s (min {d['min']:.1f}, max {d['max']:.1f})")
     for name, t in result.get("training", {}).items():
         r, f = t["reference"], t["fast"]
-        lines.append(f"training {name}: reference {r['rays_per_second']:.0f} rays/s ({r['points_per_second']:.3g} pts/s), "
-                     f"fast {f['rays_per_second']:.0f} rays/s ({f['points_per_second']:.3g} pts/s): x{t['speedup_rays_per_second']:.1f}")  # fmt: skip
+        lines.append(
+            f"training {name}: reference {r['rays_per_second']:.0f} rays/s ({r['points_per_second']:.3g} pts/s), "
+            f"fast {f['rays_per_second']:.0f} rays/s ({f['points_per_second']:.3g} pts/s): "
+            f"x{t['speedup_rays_per_second']:.1f}"
+        )
     inf = result.get("inference", {})
     if inf:
         w, h = inf["size"]
         v, m = inf["image_to_view"], inf["image_to_mesh"]
         lines.append(f"image -> codes: {1000 * inf['image_to_codes']['median']:.1f} ms")
-        lines.append(f"image -> one {w}x{h} view: fast {v['fast']['median']:.2f} s, reference {v['reference']['median']:.2f} s: x{v['speedup']:.1f}")
+        lines.append(f"image -> one {w}x{h} view: {_fast_vs_reference(v)}")
         lines.append(f"image -> {inf['views']} views: fast {inf['image_to_views']['fast']['median']:.2f} s")
-        lines.append(f"image -> mesh {inf['mesh_resolution']}^3: fast {m['fast']['median']:.2f} s, reference {m['reference']['median']:.2f} s: x{m['speedup']:.1f}")
+        lines.append(f"image -> mesh {inf['mesh_resolution']}^3: {_fast_vs_reference(m)}")
     mem = result.get("memory", {})
     lines.append("peak memory: " + ", ".join(f"{k} {v:.0f}" for k, v in mem.items()))
     return "\n".join(lines)

@@ -20,13 +20,21 @@ from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
 
 
-def step_throughput(config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device) -> dict[str, Any]:
+def step_throughput(
+    config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device
+) -> dict[str, Any]:
     """Seconds per training step (median of ``steps``), rays/s and field evaluations/s for one configuration."""
     torch.manual_seed(0)
     model = build_model(config.model, 12).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
-    sampler = RaySampler(frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, 0,
-                         input_views=config.input_views)  # fmt: skip
+    sampler = RaySampler(
+        frames,
+        config.objects_per_step,
+        config.rays_per_step,
+        config.foreground_fraction,
+        0,
+        input_views=config.input_views,
+    )
     batches = [sampler.next_batch().to(device) for _ in range(steps + 1)]
     generator = torch.Generator().manual_seed(0)
     position = [0]
@@ -34,8 +42,9 @@ def step_throughput(config: TrainConfig, frames: list[ObjectFrames], steps: int,
     def step() -> None:
         b = batches[position[0] % len(batches)]
         position[0] += 1
-        coarse, fine = model(b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background,
-                             True, generator)  # fmt: skip
+        coarse, fine = model(
+            b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background, True, generator
+        )
         loss = nerf_loss(coarse, fine, b.rgb, b.labels, config.affordance_weight).total
         optimizer.zero_grad(set_to_none=True)
         loss.backward()
@@ -59,8 +68,15 @@ def fast_variant(config: TrainConfig, samples_scale: float = 0.5) -> TrainConfig
     ``samples_scale`` times the samples (a ray's stretch inside the cube is about a third of [near, far], so half
     the samples there are still denser than the reference's)."""
     m = config.model
-    return replace(config, model=replace(m, clip_to_cube=True, num_coarse=max(4, round(m.num_coarse * samples_scale)),
-                                         num_fine=round(m.num_fine * samples_scale)))  # fmt: skip
+    return replace(
+        config,
+        model=replace(
+            m,
+            clip_to_cube=True,
+            num_coarse=max(4, round(m.num_coarse * samples_scale)),
+            num_fine=round(m.num_fine * samples_scale),
+        ),
+    )
 
 
 def reference_variant(config: TrainConfig) -> TrainConfig:
@@ -68,7 +84,9 @@ def reference_variant(config: TrainConfig) -> TrainConfig:
     return replace(config, model=replace(config.model, clip_to_cube=False))
 
 
-def compare_training(config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device) -> dict[str, Any]:
+def compare_training(
+    config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device
+) -> dict[str, Any]:
     """Reference and fast throughput of one configuration (same architecture and batches)."""
     reference, fast = reference_variant(config), fast_variant(config)
     ref, fst = step_throughput(reference, frames, steps, device), step_throughput(fast, frames, steps, device)

@@ -93,8 +93,8 @@ def stats(root: Positional[Path], views_per_object: int = 8, json_out: Path | No
         views_per_object: frames read per object for the pixel shares (0 = all).
         json_out: also write the statistics as JSON here.
     """
-    from affnerf.fileio import write_json_atomic
     from affnerf.data.stats import dataset_stats
+    from affnerf.fileio import write_json_atomic
 
     result = dataset_stats(root, views_per_object)
     print(result.table())

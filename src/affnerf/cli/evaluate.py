@@ -28,7 +28,9 @@ def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
     results = run_eval(config)
     for label, m in results.items():
         mean = m["mean"]
-        print(f"{label}: mIoU {mean['mIoU']:.3f}  PA {mean['PA']:.3f}  MPA {mean['MPA']:.3f}  ({mean['objects']} objects)")
+        print(
+            f"{label}: mIoU {mean['mIoU']:.3f}  PA {mean['PA']:.3f}  MPA {mean['MPA']:.3f}  ({mean['objects']} objects)"
+        )
     print(f"-> {config.out / 'table2.md'}")
 
 
@@ -62,8 +64,8 @@ def metrics(pred: Path, gt: Path, category_map: Path | None = None, out: Path | 
         category_map: JSON or YAML mapping file name (or stem) -> category.
         out: write metrics.json here.
     """
-    from affnerf.fileio import write_json_atomic
     from affnerf.eval.folders import metrics_text, score_folders
+    from affnerf.fileio import write_json_atomic
 
     result = score_folders(pred, gt, category_map)
     print(metrics_text(result))

@@ -42,8 +42,8 @@ def plan(
 
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import export_scene, render_grasps, save_png, summary, write_grasps
-    from affnerf.grasp.target import load_grasp_object
     from affnerf.grasp.planner import PlanConfig, plan_grasps
+    from affnerf.grasp.target import load_grasp_object
 
     obj = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
@@ -72,8 +72,8 @@ def score(mesh: Path, grasps: Path, out: Path | None = None) -> None:
 
     from affnerf.fileio import write_json_atomic
     from affnerf.grasp.io import read_grasps
-    from affnerf.grasp.target import load_grasp_object
     from affnerf.grasp.scoring import score_grasps
+    from affnerf.grasp.target import load_grasp_object
 
     obj = load_grasp_object(mesh)
     poses = np.array([p for p, _ in read_grasps(grasps)]).reshape(-1, 4, 4)

@@ -33,6 +33,9 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     from affnerf.predict.shipped import shipped_model
 
     run = config.run if config.run is not None else shipped_model()
-    summary = write_prediction(Predictor.load(run, config.device, config.chunk, fast=config.fast, grid_threshold=config.grid_threshold), replace(config, run=run))
+    summary = write_prediction(
+        Predictor.load(run, config.device, config.chunk, fast=config.fast, grid_threshold=config.grid_threshold),
+        replace(config, run=run),
+    )
     print(json.dumps({k: summary[k] for k in ("classes_present", "surface_area_m2")}, indent=1))
     print(f"-> {config.out}")

@@ -51,8 +51,9 @@ class Intrinsics:
 DEFAULT_CAMERA_ANGLE_X = math.radians(60.0)
 
 
-def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray = np.array([0.0, 0.0, 1.0])) -> np.ndarray:
-    """Camera-to-world (4, 4) of a camera at ``eye`` looking at ``target`` with ``up`` roughly up in the image.
+def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray | None = None) -> np.ndarray:
+    """Camera-to-world (4, 4) of a camera at ``eye`` looking at ``target`` with ``up`` (default +z) roughly up in
+    the image.
 
     Example:
         >>> look_at(np.array([0, 0, 1.0]), np.zeros(3), up=np.array([0, 1.0, 0]))[:3, 2].tolist()
@@ -60,7 +61,7 @@ def look_at(eye: np.ndarray, target: np.ndarray, up: np.ndarray = np.array([0.0,
     """
     back = np.asarray(eye, np.float64) - np.asarray(target, np.float64)
     back /= np.linalg.norm(back)
-    right = np.cross(up, back)
+    right = np.cross(np.array([0.0, 0.0, 1.0]) if up is None else up, back)
     if np.linalg.norm(right) < 1e-8:  # looking straight along up: pick any right vector
         right = np.cross(np.array([0.0, 1.0, 0.0]), back)
     right /= np.linalg.norm(right)
@@ -90,10 +91,8 @@ class CameraSampler:
         elev = np.radians(rng.uniform(*self.elevation_deg, n))
         radius = rng.uniform(*self.radius, n)
         targets = rng.normal(0.0, self.jitter, (n, 3))
-        eyes = radius[:, None] * np.stack(
-            [np.cos(elev) * np.cos(yaw), np.cos(elev) * np.sin(yaw), np.sin(elev)], 1
-        )
-        return np.stack([look_at(e, t) for e, t in zip(eyes, targets)])
+        eyes = radius[:, None] * np.stack([np.cos(elev) * np.cos(yaw), np.cos(elev) * np.sin(yaw), np.sin(elev)], 1)
+        return np.stack([look_at(e, t) for e, t in zip(eyes, targets, strict=True)])
 
 
 @functools.lru_cache(maxsize=8)

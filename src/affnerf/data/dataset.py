@@ -119,7 +119,8 @@ class Dataset:
             unknown = sorted(set(categories) - set(self.categories))
             if unknown:
                 raise input_error(
-                    self.root / "dataset.json", f"unknown category {', '.join(unknown)} (this dataset has: {', '.join(self.categories)})"
+                    self.root / "dataset.json",
+                    f"unknown category {', '.join(unknown)} (this dataset has: {', '.join(self.categories)})",
                 )
         return [
             o
@@ -141,7 +142,9 @@ class Dataset:
         if data.record.affordance_classes != self.affordance_classes:
             raise input_error(folder / "transforms.json", "affordance_classes differ from dataset.json")
         if data.record.category != entry.category:
-            raise input_error(folder / "transforms.json", f"category {data.record.category!r}, dataset.json says {entry.category!r}")
+            raise input_error(
+                folder / "transforms.json", f"category {data.record.category!r}, dataset.json says {entry.category!r}"
+            )
         return data
 
 

@@ -6,7 +6,6 @@ problem as one line naming the file. Writers are atomic: a temporary file rename
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -127,9 +126,21 @@ class ObjectRecord:
 
 
 _CORE_KEYS = {
-    "object_id", "category", "w", "h", "fl_x", "fl_y", "cx", "cy", "camera_angle_x", "background_color",
-    "depth_unit_scale_factor", "affordance_classes", "parts", "frames",
-}  # fmt: skip
+    "object_id",
+    "category",
+    "w",
+    "h",
+    "fl_x",
+    "fl_y",
+    "cx",
+    "cy",
+    "camera_angle_x",
+    "background_color",
+    "depth_unit_scale_factor",
+    "affordance_classes",
+    "parts",
+    "frames",
+}
 
 
 def _number(data: dict, key: str, path: Path, positive: bool = False) -> float:

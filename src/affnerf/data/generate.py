@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import math
 import time
-from functools import partial
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -246,4 +246,3 @@ class _Bars:
     def close(self) -> None:
         self.frames.close()
         self.objects.close()
-

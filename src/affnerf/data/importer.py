@@ -15,10 +15,10 @@ from tqdm import tqdm
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, CameraSampler, Intrinsics
 from affnerf.data.format import SPLITS, IndexEntry
-from affnerf.fileio import read_json_file
 from affnerf.data.index import update_index
 from affnerf.data.writer import is_complete, write_object
 from affnerf.errors import AffnerfError, input_error
+from affnerf.fileio import read_json_file
 from affnerf.objects.asset import ObjectAsset
 
 logger = logging.getLogger(__name__)
@@ -164,14 +164,23 @@ def import_partnet(sources: Sequence[Path], config: ImportConfig, progress: bool
     todo = sum(action != "keep" for action in actions)
     bar = tqdm(total=todo * config.views, desc="frames", unit="frame", disable=not progress)
     try:
-        for (src, asset, rng), entry, action in zip(assets, entries, actions):
+        for (src, asset, rng), entry, action in zip(assets, entries, actions, strict=True):
             if action == "keep":
                 logger.info("%s: already imported with the same settings; kept", Path(config.out) / entry.path)
             else:
                 poses = CameraSampler().sample(rng, config.views)
                 extra = {"partnet_source": str(src.resolve()), **recorded}
-                write_object(config.out, entry, asset, poses, intr, config.background, extra,
-                             on_frame=lambda: bar.update(1), replace=action == "replace")  # fmt: skip
+                write_object(
+                    config.out,
+                    entry,
+                    asset,
+                    poses,
+                    intr,
+                    config.background,
+                    extra,
+                    on_frame=lambda: bar.update(1),
+                    replace=action == "replace",
+                )
             update_index(config.out, [entry])
     finally:
         bar.close()

@@ -94,7 +94,9 @@ def scan_objects(root: Path) -> list[IndexEntry]:
         if "split" not in record.extra:
             log.warning("%s: no 'split' recorded; listed as train", transforms)
         source = str(record.extra.get("source", "procedural"))
-        entries.append(IndexEntry(record.object_id, record.category, folder.relative_to(root).as_posix(), split, source))
+        entries.append(
+            IndexEntry(record.object_id, record.category, folder.relative_to(root).as_posix(), split, source)
+        )
     ids = [e.id for e in entries]
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
     if duplicates:

@@ -41,8 +41,8 @@ class DatasetStats:
         return {
             "objects": {f"{c}/{s}": n for (c, s), n in sorted(self.objects.items())},
             "frames_counted": self.frames,
-            "pixel_share": dict(zip(self.classes, self.pixel_share().round(6).tolist())),
-            "pixel_share_object": dict(zip(self.classes, self.pixel_share(True).round(6).tolist())),
+            "pixel_share": dict(zip(self.classes, self.pixel_share().round(6).tolist(), strict=True)),
+            "pixel_share_object": dict(zip(self.classes, self.pixel_share(True).round(6).tolist(), strict=True)),
         }
 
     def table(self) -> str:
@@ -76,7 +76,11 @@ def dataset_stats(root: Path, views_per_object: int = 8) -> DatasetStats:
         stats.objects[(entry.category, entry.split)] += 1
         obj = ds.load_object(entry)
         n = len(obj)
-        chosen = range(n) if views_per_object <= 0 or views_per_object >= n else np.linspace(0, n - 1, views_per_object).round().astype(int)
+        chosen = (
+            range(n)
+            if views_per_object <= 0 or views_per_object >= n
+            else np.linspace(0, n - 1, views_per_object).round().astype(int)
+        )
         for i in chosen:
             stats.pixels += np.bincount(obj.affordance(int(i)).reshape(-1), minlength=len(stats.classes))
             stats.frames += 1

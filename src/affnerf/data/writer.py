@@ -17,8 +17,8 @@ import numpy as np
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.data.format import FrameRecord, IndexEntry, ObjectRecord, PartRecord
-from affnerf.fileio import write_json_atomic
 from affnerf.data.images import write_depth, write_labels, write_rgb
+from affnerf.fileio import write_json_atomic
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.objects.asset import Material, ObjectAsset, SurfaceMesh, merge_parts
 from affnerf.vocab import AFFORDANCE_CLASSES
@@ -59,7 +59,9 @@ def surface_mesh_record(surface: SurfaceMesh) -> LabelledMesh:
 def surface_from_record(mesh: LabelledMesh) -> SurfaceMesh:
     """The renderable surface of a ground-truth ``mesh.ply`` (the inverse of :func:`surface_mesh_record`, with
     each face in its first vertex's colour)."""
-    face_rgb = mesh.vertex_colors[mesh.faces[:, 0]] if mesh.vertex_colors is not None else np.full((len(mesh.faces), 3), 180)
+    face_rgb = (
+        mesh.vertex_colors[mesh.faces[:, 0]] if mesh.vertex_colors is not None else np.full((len(mesh.faces), 3), 180)
+    )
     colors, face_material = np.unique(face_rgb, axis=0, return_inverse=True)
     n = len(mesh.faces)
     return SurfaceMesh(

@@ -16,7 +16,13 @@ from affnerf.objects.asset import ObjectAsset, merge_parts
 from affnerf.objects.registry import CATEGORY_NAMES, make_object, object_seed
 
 #: The camera of the examples: in the band the training cameras come from (conventions §1), from the front-left.
-EXAMPLE_EYE = 0.62 * np.array([np.cos(np.radians(35)) * np.cos(np.radians(-115)), np.cos(np.radians(35)) * np.sin(np.radians(-115)), np.sin(np.radians(35))])
+EXAMPLE_EYE = 0.62 * np.array(
+    [
+        np.cos(np.radians(35)) * np.cos(np.radians(-115)),
+        np.cos(np.radians(35)) * np.sin(np.radians(-115)),
+        np.sin(np.radians(35)),
+    ]
+)
 
 
 def held_out_index(seed: int, category: str, objects_per_category: int) -> int:

@@ -35,12 +35,31 @@ def run_pipeline(config: DemoConfig) -> dict[str, Any]:
     t = time.perf_counter()
     run = out / "run"
     resume = (run / "checkpoints").is_dir()
-    train(replace(SMALL, data=data, out=run, steps=10**6, time_limit=config.train_minutes, val_every=0, resume=resume,
-                  device=config.device))  # fmt: skip
+    train(
+        replace(
+            SMALL,
+            data=data,
+            out=run,
+            steps=10**6,
+            time_limit=config.train_minutes,
+            val_every=0,
+            resume=resume,
+            device=config.device,
+        )
+    )
     stage("train", t)
     t = time.perf_counter()
-    evaluation = run_eval(EvalConfig(run=run, data=data, out=out / "eval", method="affnerf,retrieval,constant",
-                                     target_views=4, scale=0.5, device=config.device))  # fmt: skip
+    evaluation = run_eval(
+        EvalConfig(
+            run=run,
+            data=data,
+            out=out / "eval",
+            method="affnerf,retrieval,constant",
+            target_views=4,
+            scale=0.5,
+            device=config.device,
+        )
+    )
     stage("eval", t)
     t = time.perf_counter()
     examples = out / "examples"
@@ -50,7 +69,12 @@ def run_pipeline(config: DemoConfig) -> dict[str, Any]:
         Image.fromarray(ds.load_object(entry).rgb(0)).save(examples / f"{entry.id}.png")
     report = run_examples(replace(config, out=out / "predictions"), run, examples, evaluation.get("affnerf"))
     stage("predict + grasp", t)
-    summary = {"stages_seconds": stages, "report": str(report), "dataset": str(data), "run": str(run),
-               "eval": str(out / "eval" / "table2.md")}  # fmt: skip
+    summary = {
+        "stages_seconds": stages,
+        "report": str(report),
+        "dataset": str(data),
+        "run": str(run),
+        "eval": str(out / "eval" / "table2.md"),
+    }
     (out / "pipeline.json").write_text(json.dumps(summary, indent=1))
     return summary

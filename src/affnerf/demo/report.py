@@ -63,19 +63,34 @@ def _example(ex: ExampleResult) -> str:
     grasp = ""
     if ex.grasps:
         g = ex.grasps
-        grasp = (f"<p><b>Grasps</b> ({html.escape(str(g.get('affordance')))}): {g.get('count', 0)} planned, "
-                 f"best ε {g.get('best_epsilon', 0):.4f}</p>")  # fmt: skip
+        grasp = (
+            f"<p><b>Grasps</b> ({html.escape(str(g.get('affordance')))}): {g.get('count', 0)} planned, "
+            f"best ε {g.get('best_epsilon', 0):.4f}</p>"
+        )
     timing = ", ".join(f"{k} {v:.1f} s" for k, v in ex.seconds.items())
-    pictures = [("input", ex.input_image), ("prepared crop", ex.prepared), ("turntable (RGB | affordance)", ex.turntable),
-                ("affordance model", ex.mesh_preview)] + ([("best grasps", ex.grasps_picture)] if ex.grasps_picture else [])  # fmt: skip
-    figures = "".join(f'<figure><img src="{html.escape(src)}" alt="{html.escape(cap)}"><figcaption>{html.escape(cap)}</figcaption></figure>'
-                      for cap, src in pictures)  # fmt: skip
-    model = f'<p>Mesh: <a href="{html.escape(ex.model_file)}">{html.escape(ex.model_file)}</a></p>' if ex.model_file else ""
-    return (f'<div class="example"><div class="card"><h3>{html.escape(ex.name)}</h3><p>{classes}</p>{grasp}{model}'
-            f'<p class="sub">{timing}</p></div>{figures}</div>')  # fmt: skip
+    pictures = [
+        ("input", ex.input_image),
+        ("prepared crop", ex.prepared),
+        ("turntable (RGB | affordance)", ex.turntable),
+        ("affordance model", ex.mesh_preview),
+    ] + ([("best grasps", ex.grasps_picture)] if ex.grasps_picture else [])
+    figures = "".join(
+        f'<figure><img src="{html.escape(src)}" alt="{html.escape(cap)}">'
+        f"<figcaption>{html.escape(cap)}</figcaption></figure>"
+        for cap, src in pictures
+    )
+    model = (
+        f'<p>Mesh: <a href="{html.escape(ex.model_file)}">{html.escape(ex.model_file)}</a></p>' if ex.model_file else ""
+    )
+    return (
+        f'<div class="example"><div class="card"><h3>{html.escape(ex.name)}</h3><p>{classes}</p>{grasp}{model}'
+        f'<p class="sub">{timing}</p></div>{figures}</div>'
+    )
 
 
-def write_report(path: Path, examples: list[ExampleResult], model: str, metrics: dict[str, Any] | None, seconds: float) -> Path:
+def write_report(
+    path: Path, examples: list[ExampleResult], model: str, metrics: dict[str, Any] | None, seconds: float
+) -> Path:
     """Write the HTML report; image paths in ``examples`` are relative to its folder."""
     body = [
         "<h1>affnerf demo</h1>",
@@ -85,9 +100,10 @@ def write_report(path: Path, examples: list[ExampleResult], model: str, metrics:
         _metrics_table(metrics),
         "<h2>Examples</h2>",
         *(_example(ex) for ex in examples),
-        "<p class=\"sub\">Open a folder in 3D with <code>affnerf view demo_out/&lt;example&gt;</code>.</p>",
+        '<p class="sub">Open a folder in 3D with <code>affnerf view demo_out/&lt;example&gt;</code>.</p>',
     ]
-    page = f"<!doctype html><html><head><meta charset='utf-8'><title>affnerf demo</title><style>{_STYLE}</style></head><body>{''.join(body)}</body></html>"
+    head = f"<head><meta charset='utf-8'><title>affnerf demo</title><style>{_STYLE}</style></head>"
+    page = f"<!doctype html><html>{head}<body>{''.join(body)}</body></html>"
     Path(path).write_text(page)
     (Path(path).parent / "report.json").write_text(json.dumps([ex.__dict__ for ex in examples], indent=1))
     return Path(path)

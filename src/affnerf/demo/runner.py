@@ -13,14 +13,14 @@ from typing import Any
 from PIL import Image
 from tqdm import tqdm
 
-from affnerf.pictures.meshes import mesh_preview
-from affnerf.pictures.sheets import overview_sheet
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
-from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, plan_grasps
+from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
+from affnerf.pictures.meshes import mesh_preview
+from affnerf.pictures.sheets import overview_sheet
 from affnerf.predict.outputs import PredictConfig, write_prediction
 from affnerf.predict.predictor import Predictor
 
@@ -83,24 +83,37 @@ def demo_example(predictor: Predictor, image: Path, out: Path, config: DemoConfi
         if grasps:
             save_png(out / "grasps" / "grasps.png", render_grasps(obj, grasps, hand))
             grasp_png = "grasps/grasps.png"
-        grasps_info = {"affordance": wanted, "count": len(grasps), "best_epsilon": max((g.epsilon for g in grasps), default=0.0)}
+        grasps_info = {
+            "affordance": wanted,
+            "count": len(grasps),
+            "best_epsilon": max((g.epsilon for g in grasps), default=0.0),
+        }
         timing["grasp"] = time.perf_counter() - start
     else:
         Image.new("RGB", (240, 240), (255, 255, 255)).save(out / "mesh_preview.png")
     rel = out.name
     return ExampleResult(
-        name=image.stem, input_image=f"{rel}/original{image.suffix}", prepared=f"{rel}/input.png",
-        turntable=f"{rel}/turntable.gif", mesh_preview=f"{rel}/mesh_preview.png",
+        name=image.stem,
+        input_image=f"{rel}/original{image.suffix}",
+        prepared=f"{rel}/input.png",
+        turntable=f"{rel}/turntable.gif",
+        mesh_preview=f"{rel}/mesh_preview.png",
         grasps_picture=f"{rel}/{grasp_png}" if grasp_png else None,
         model_file=f"{rel}/affordance_model.ply" if mesh_file.is_file() else None,
-        classes=summary["surface_area_m2"], grasps=grasps_info, seconds=timing,
-    )  # fmt: skip
+        classes=summary["surface_area_m2"],
+        grasps=grasps_info,
+        seconds=timing,
+    )
 
 
 def model_metrics(run: Path) -> dict[str, Any] | None:
     """Evaluation metrics shipped beside a model (``<checkpoint>.metrics.json``) or in its run folder."""
     run = Path(run)
-    for candidate in (run.with_suffix(".metrics.json"), run / "eval" / "metrics.json", run.parent / "eval" / "metrics.json"):
+    for candidate in (
+        run.with_suffix(".metrics.json"),
+        run / "eval" / "metrics.json",
+        run.parent / "eval" / "metrics.json",
+    ):
         if candidate.is_file():
             return json.loads(candidate.read_text())
     return None

@@ -38,8 +38,11 @@ def _category(name: str, mapping: dict[str, str] | None, map_path: Path | None) 
     raise input_error(map_path, f"no category for {name}")
 
 
-def score_folders(pred: Path, gt: Path, category_map: Path | None = None, num_classes: int | None = None) -> dict[str, Any]:
-    """Metrics (conventions §5 schema, method ``folder``) of every label PNG under ``gt`` against its namesake under ``pred``.
+def score_folders(
+    pred: Path, gt: Path, category_map: Path | None = None, num_classes: int | None = None
+) -> dict[str, Any]:
+    """Metrics (conventions §5 schema, method ``folder``) of every label PNG under ``gt`` against its namesake under
+    ``pred``.
 
     Raises:
         AffnerfError: for a missing folder, a ground-truth file without prediction, mismatched sizes, or labels
@@ -60,7 +63,9 @@ def score_folders(pred: Path, gt: Path, category_map: Path | None = None, num_cl
             raise input_error(pred / name, "prediction missing for this ground-truth file")
         g = read_labels(gt / name, n)
         p = read_labels(pred / name, n, (g.shape[1], g.shape[0]))
-        result.add(_category(name, mapping, category_map), g[None], Prediction(p[None]), np.zeros((1, *g.shape, 3), np.uint8))
+        result.add(
+            _category(name, mapping, category_map), g[None], Prediction(p[None]), np.zeros((1, *g.shape, 3), np.uint8)
+        )
     return result.to_json()
 
 
@@ -73,6 +78,3 @@ def metrics_text(metrics: dict[str, Any]) -> str:
         cells = "".join(f"{m[k]:>12.3f}" if m.get(k) is not None else f"{'–':>12}" for k in keys)
         lines.append(f"{name:<14}{cells}{m.get('views', 0):>7}")
     return "\n".join(lines)
-
-
-

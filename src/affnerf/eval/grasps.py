@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 
 from affnerf.data.dataset import Dataset, ObjectData
-from affnerf.fileio import write_json_atomic
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import ProtocolConfig, choose_views
+from affnerf.fileio import write_json_atomic
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
+from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import LoadedModel, load_model
@@ -96,7 +96,9 @@ def evaluate_object(
 ) -> dict[str, Any]:
     """Both conditions on one object: per condition, epsilon, on-affordance flags and lift results per grasp."""
     gt = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
-    view = choose_views(len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed))[0][0]
+    view = choose_views(
+        len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
+    )[0][0]
     plan = PlanConfig(num=config.num, seed=config.seed)
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))
     sources = {"original": (GraspObject(gt.vertices, gt.faces, None, gt.name), replace(plan, affordance="none"))}
@@ -154,9 +156,11 @@ def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
     on-affordance share and the lift success rate as further tables."""
     cats = sorted(summary["categories"])
     lines = [f"# Grasps on {context.get('split', 'test')} objects, laid out like the paper's Table 3", ""]
-    for key, title in (("epsilon", "Ferrari-Canny epsilon (mean over planned grasps, scored on the ground-truth mesh)"),
-                       ("on_grasp_share", "Share of grasps with both contacts on ground-truth `grasp` parts"),
-                       ("lift_success", "Physics lift success rate (best grasps per object)")):  # fmt: skip
+    for key, title in (
+        ("epsilon", "Ferrari-Canny epsilon (mean over planned grasps, scored on the ground-truth mesh)"),
+        ("on_grasp_share", "Share of grasps with both contacts on ground-truth `grasp` parts"),
+        ("lift_success", "Physics lift success rate (best grasps per object)"),
+    ):
         lines += [f"**{title}**", "", "| | " + " | ".join(cats) + " | Average |", "|" + " --- |" * (len(cats) + 2)]
         for cond in CONDITIONS:
             cells = [summary["categories"][c][cond][key] for c in cats] + [summary["mean"][cond][key]]

@@ -114,7 +114,7 @@ class EvalResult:
         cat = self.categories.setdefault(category, CategoryResult(np.zeros((self.num_classes,) * 2, np.int64)))
         cat.confusion += confusion_matrix(gt, pred.labels, self.num_classes)
         if pred.rgb is not None:
-            cat.psnr += [psnr(p, g / 255.0) for p, g in zip(pred.rgb, gt_rgb)]
+            cat.psnr += [psnr(p, g / 255.0) for p, g in zip(pred.rgb, gt_rgb, strict=True)]
         cat.objects += 1
         cat.views += len(gt)
 

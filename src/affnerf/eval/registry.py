@@ -59,11 +59,19 @@ _METHODS: dict[str, MethodSpec] = {}
 
 
 def register_method(spec: MethodSpec) -> MethodSpec:
-    """Make ``spec`` available by its name; registering a name twice is an error."""
-    if spec.name in _METHODS:
+    """Make ``spec`` available by its name; a second method under a taken name is an error (the same source
+    imported again, as doctest collection may do, replaces its earlier registration)."""
+    taken = _METHODS.get(spec.name)
+    if taken is not None and _source(taken.build) != _source(spec.build):
         raise ValueError(f"evaluation method {spec.name!r} is registered twice")
     _METHODS[spec.name] = spec
     return spec
+
+
+def _source(build: Callable) -> tuple[str, int] | None:
+    """Where a builder is defined (file, line), or None when that cannot be told."""
+    code = getattr(build, "__code__", None)
+    return None if code is None else (code.co_filename, code.co_firstlineno)
 
 
 def method_names() -> list[str]:

@@ -42,7 +42,10 @@ def metrics_table(results: Sequence[dict[str, Any]], metrics: Sequence[str] = MA
         columns.append([r["mean"].get(metric) for r in results])
         best = [max((v for v in col if v is not None and math.isfinite(v)), default=None) for col in columns]
         for i, r in enumerate(results):
-            cells = [_fmt(col[i], col[i] is not None and col[i] == b and len(results) > 1) for col, b in zip(columns, best)]
+            cells = [
+                _fmt(col[i], col[i] is not None and col[i] == b and len(results) > 1)
+                for col, b in zip(columns, best, strict=True)
+            ]
             lines.append(f"| {metric if i == 0 else ''} | {r['method']} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

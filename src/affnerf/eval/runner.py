@@ -1,8 +1,9 @@
 """``affnerf eval``: run the Table 2 protocol for one or more methods and write metrics, table and figure.
 
 Each method's results go to ``OUT/metrics_<method>.json`` (conventions §5 schema); ``OUT/metrics.json`` holds
-AFF-NeRF's once it has been evaluated into ``OUT``, and until then the first method's. ``OUT/table2.md`` and ``OUT/figure.png`` are rebuilt from every method evaluated into ``OUT`` so
-far, so methods evaluated in separate calls (a baseline with its own run) end up in one table.
+AFF-NeRF's once it has been evaluated into ``OUT``, and until then the first method's. ``OUT/table2.md`` and
+``OUT/figure.png`` are rebuilt from every method evaluated into ``OUT`` so far, so methods evaluated in separate
+calls (a baseline with its own run) end up in one table.
 """
 
 from __future__ import annotations
@@ -14,14 +15,15 @@ from typing import Any, Literal
 
 from PIL import Image
 
-from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
-from affnerf.fileio import write_json_atomic
-from affnerf.errors import AffnerfError
 import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
+from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
+from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import Method, ProtocolConfig, evaluate
 from affnerf.eval.registry import MethodContext, method_spec, parse_methods
 from affnerf.eval.report import figure_grid, read_method_results, save_examples, table2_markdown
+from affnerf.fileio import write_json_atomic
 from affnerf.model.config import RAYS_PER_CHUNK
+
 
 @dataclass(frozen=True)
 class EvalConfig:
@@ -107,12 +109,17 @@ def run_eval(config: EvalConfig) -> dict[str, dict[str, Any]]:
         result = evaluate(method, objects, protocol, config.split, len(ds.affordance_classes), config.figure_objects)
         result.method = label
         metrics = result.to_json()
-        metrics["settings"] = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
+        metrics["settings"] = {
+            **{k: str(v) for k, v in asdict(config).items()},
+            "seconds": round(time.perf_counter() - started, 1),
+        }
         write_json_atomic(out / f"metrics_{label}.json", metrics)
         save_examples(out, label, result.examples)
         results[label] = metrics
     everything = read_method_results(out)
-    main = next((r for r in everything if r["method"] == "affnerf"), results[method_label(names[0], config.input_views)])
+    main = next(
+        (r for r in everything if r["method"] == "affnerf"), results[method_label(names[0], config.input_views)]
+    )
     write_json_atomic(out / "metrics.json", main)
     (out / "table2.md").write_text(table2_markdown(everything))
     figure = figure_grid(out, [r["method"] for r in everything])

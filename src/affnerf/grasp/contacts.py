@@ -36,7 +36,10 @@ def pad_offsets(gripper: ParallelJawGripper, per_side: int = 3) -> np.ndarray:
 
 
 def close_jaws(
-    obj: GraspObject, poses: np.ndarray, gripper: ParallelJawGripper = ParallelJawGripper(), patch_tolerance: float = 0.001
+    obj: GraspObject,
+    poses: np.ndarray,
+    gripper: ParallelJawGripper = ParallelJawGripper(),
+    patch_tolerance: float = 0.001,
 ) -> Contacts:
     """Close the jaws of grasps (G, 4, 4) from full opening until each pad first touches the object.
 

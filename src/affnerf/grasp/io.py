@@ -11,12 +11,11 @@ import trimesh
 from PIL import Image
 
 from affnerf.data.format import check_pose
-from affnerf.fileio import write_json_atomic
-from affnerf.fileio import read_json_file
 from affnerf.errors import input_error
+from affnerf.fileio import read_json_file, write_json_atomic
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.target import GraspObject
 from affnerf.grasp.planner import Grasp
+from affnerf.grasp.target import GraspObject
 from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
 from affnerf.vocab import colorize_labels
 
@@ -76,13 +75,17 @@ def object_mesh(obj: GraspObject) -> trimesh.Trimesh:
     """The object coloured by affordance (grey when unlabelled)."""
     mesh = trimesh.Trimesh(obj.vertices, obj.faces, process=False)
     if obj.face_affordance is not None:
-        mesh.visual.face_colors = np.concatenate([colorize_labels(obj.face_affordance), np.full((len(obj.faces), 1), 255)], 1)
+        mesh.visual.face_colors = np.concatenate(
+            [colorize_labels(obj.face_affordance), np.full((len(obj.faces), 1), 255)], 1
+        )
     else:
         mesh.visual.face_colors = [180, 180, 180, 255]
     return mesh
 
 
-def export_scene(path: Path, obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 5) -> None:
+def export_scene(
+    path: Path, obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 5
+) -> None:
     """A GLB scene: the object and gripper models at the ``count`` best grasps."""
     scene = trimesh.Scene()
     scene.add_geometry(object_mesh(obj), geom_name="object")
@@ -92,7 +95,9 @@ def export_scene(path: Path, obj: GraspObject, grasps: list[Grasp], gripper: Par
     Path(path).write_bytes(scene.export(file_type="glb"))
 
 
-def render_grasps(obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 3, size: int = 320) -> np.ndarray:
+def render_grasps(
+    obj: GraspObject, grasps: list[Grasp], gripper: ParallelJawGripper, count: int = 3, size: int = 320
+) -> np.ndarray:
     """(size, 3 * size, 3) uint8 pictures of the object (coloured by affordance) with the ``count`` best grasps
     (the best green, the others orange), from three sides."""
     labels = obj.face_affordance if obj.face_affordance is not None else np.zeros(len(obj.faces), np.int64)
@@ -115,4 +120,8 @@ def save_png(path: Path, image: np.ndarray) -> None:
 def summary(grasps: list[Grasp]) -> dict[str, Any]:
     """Counts and the quality of the grasps, for printing."""
     eps = [g.epsilon for g in grasps]
-    return {"grasps": len(grasps), "best_epsilon": max(eps, default=0.0), "mean_epsilon": float(np.mean(eps)) if eps else 0.0}
+    return {
+        "grasps": len(grasps),
+        "best_epsilon": max(eps, default=0.0),
+        "mean_epsilon": float(np.mean(eps)) if eps else 0.0,
+    }

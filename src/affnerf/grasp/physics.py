@@ -3,8 +3,8 @@
 Protocol of :func:`lift_test`, in a fresh pybullet client per call that is always disconnected afterwards:
 
 1. The object sits where its mesh frame says (world = mesh frame, +z up: gravity acts along -z). Its collision
-   shape is a convex decomposition of the mesh (:func:`convex_parts`, CoACD); its mass, inertia, friction and
-   restitution come from :class:`LiftConfig`, never from pybullet's defaults.
+   shape is a convex decomposition of the mesh (:func:`affnerf.grasp.convex.convex_parts`, CoACD); its mass,
+   inertia, friction and restitution come from :class:`LiftConfig`, never from pybullet's defaults.
 2. A floating gripper, the boxes of :meth:`ParallelJawGripper.boxes` (a palm and two fingers on prismatic
    joints geared to move together), opened to ``min(width + open_margin, max_opening)``, starts
    ``approach_distance`` back along the grasp's -z. If it overlaps the object there: ``"collision at start"``.
@@ -24,10 +24,8 @@ ramp (``changeConstraint``). Bullet multiplies two bodies' lateral frictions, so
 
 from __future__ import annotations
 
-import hashlib
 import os
 import tempfile
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,12 +35,10 @@ from pybullet_utils.bullet_client import BulletClient
 from scipy.spatial.transform import Rotation
 
 from affnerf.errors import AffnerfError
+from affnerf.grasp.convex import convex_parts, mass_properties
 from affnerf.grasp.gripper import ParallelJawGripper
 
 FINGER_LINKS = (0, 1)  #: pybullet link indices of finger 1 (at -x of the grasp frame) and finger 2 (at +x)
-_MAX_PIECES = 256  #: meshes with more connected pieces than this are decomposed as a whole
-_CACHE_SIZE = 64  #: decompositions kept by :func:`convex_parts`
-_CACHE: OrderedDict[str, tuple[trimesh.Trimesh, ...]] = OrderedDict()
 
 
 @dataclass(frozen=True)
@@ -76,13 +72,26 @@ class LiftConfig:
     approach_tolerance: float = 0.005  #: the approach collided when it moved the object further than this
 
     def __post_init__(self) -> None:
-        positive = ("mass", "gripping_force", "finger_speed", "finger_mass", "palm_mass", "drive_force",
-                    "approach_time", "close_time", "lift_time", "time_step", "solver_iterations")
+        positive = (
+            "mass",
+            "gripping_force",
+            "finger_speed",
+            "finger_mass",
+            "palm_mass",
+            "drive_force",
+            "approach_time",
+            "close_time",
+            "lift_time",
+            "time_step",
+            "solver_iterations",
+        )
         bad = {name for name in positive if not getattr(self, name) > 0}
         bad |= {name for name, value in vars(self).items() if not (np.isfinite(value) and value >= 0)}
         if bad:
-            raise AffnerfError(f"lift test config: {', '.join(sorted(bad))} out of range (all are finite and"
-                               " non-negative; masses, forces, speeds, durations and iterations positive)")
+            raise AffnerfError(
+                f"lift test config: {', '.join(sorted(bad))} out of range (all are finite and"
+                " non-negative; masses, forces, speeds, durations and iterations positive)"
+            )
 
 
 @dataclass(frozen=True)
@@ -97,98 +106,6 @@ class LiftResult:
     reason: str
 
 
-def convex_parts(mesh: trimesh.Trimesh, threshold: float = 0.08, max_parts: int = 16) -> list[trimesh.Trimesh]:
-    """Convex decomposition of ``mesh`` (metres; closed or open, possibly a union of parts) with CoACD, cached
-    per mesh content and settings; returns convex meshes in the mesh frame (copies, safe to modify).
-
-    When every connected piece is closed (as given, or after merging duplicate vertices), each piece is
-    decomposed on its own, else the mesh as a whole (CoACD remeshes it). A piece that is nearly convex, small or
-    that CoACD fails on becomes its convex hull; flat pieces are dropped. A typical object (0.1-0.44 m, a few
-    thousand faces) takes well under a few seconds, a large thin-walled one (30k faces) ten or more.
-
-    Args:
-        mesh: the mesh.
-        threshold: CoACD's concavity threshold, relative to a piece's size (larger: fewer, coarser parts).
-        max_parts: at most this many convex parts per piece.
-
-    Raises:
-        AffnerfError: the mesh is empty, has non-finite vertices, or encloses no volume at all.
-    """
-    if len(mesh.faces) == 0 or not np.all(np.isfinite(mesh.vertices)):
-        raise AffnerfError("lift test: the mesh is empty or has non-finite vertices")
-    digest = hashlib.sha1(np.ascontiguousarray(mesh.vertices, np.float64).tobytes())
-    digest.update(np.ascontiguousarray(mesh.faces, np.int64).tobytes())
-    key = f"{digest.hexdigest()}:{threshold}:{max_parts}"
-    if key not in _CACHE:
-        _CACHE[key] = tuple(_decompose(mesh, threshold, max_parts))
-        if len(_CACHE) > _CACHE_SIZE:
-            _CACHE.popitem(last=False)
-    _CACHE.move_to_end(key)
-    return [part.copy() for part in _CACHE[key]]
-
-
-def _decompose(mesh: trimesh.Trimesh, threshold: float, max_parts: int) -> list[trimesh.Trimesh]:
-    """Uncached body of :func:`convex_parts`."""
-    pieces = [mesh]
-    merged = mesh.copy()
-    merged.merge_vertices()
-    for candidate in (mesh, merged):
-        split = candidate.split(only_watertight=False)
-        if 0 < len(split) <= _MAX_PIECES and all(piece.is_watertight for piece in split):
-            pieces = split
-            break
-    size = float(np.max(mesh.extents))
-    parts = [part for piece in pieces for part in _decompose_piece(piece, threshold, max_parts, size)]
-    if not parts:
-        raise AffnerfError("lift test: the mesh encloses no volume")
-    return parts
-
-
-def _hull(vertices: np.ndarray) -> trimesh.Trimesh | None:
-    """Convex hull of points, or None when they are flat or degenerate."""
-    try:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            hull = trimesh.Trimesh(vertices=np.asarray(vertices, float)).convex_hull
-            return hull if hull.volume > 0.0 else None
-    except Exception:  # noqa: BLE001 - qhull rejects flat or tiny point sets
-        return None
-
-
-def _decompose_piece(piece: trimesh.Trimesh, threshold: float, max_parts: int, size: float) -> list[trimesh.Trimesh]:
-    """Convex parts of one piece: its hull when it nearly fills it, is under 5% of ``size`` or CoACD fails."""
-    hull = _hull(piece.vertices)
-    if hull is None:
-        return []
-    convex = piece.is_volume and piece.volume >= 0.98 * hull.volume
-    if convex or len(piece.faces) < 8 or np.max(piece.extents) < 0.05 * size:
-        return [hull]
-    try:
-        import coacd
-
-        coacd.set_log_level("error")
-        raw = coacd.run_coacd(
-            coacd.Mesh(np.asarray(piece.vertices, np.float64), np.asarray(piece.faces, np.int32)),
-            threshold=threshold, max_convex_hull=max_parts, preprocess_mode="auto", preprocess_resolution=40,
-            resolution=1000, mcts_nodes=10, mcts_iterations=30, mcts_max_depth=2, seed=0,
-        )
-    except Exception:  # noqa: BLE001 - any CoACD failure falls back to the hull
-        return [hull]
-    parts = [part for part in (_hull(vertices) for vertices, _ in raw if len(vertices) >= 4) if part is not None]
-    return parts or [hull]
-
-
-def mass_properties(parts: list[trimesh.Trimesh], mass: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centre of mass (3,), principal moments of inertia (3,) and principal axes (3x3 rotation, as columns) of a
-    uniform solid of ``mass`` filling the convex ``parts`` (where parts overlap, they count twice)."""
-    solid = trimesh.util.concatenate(parts)
-    if not solid.volume > 0.0:
-        raise AffnerfError("lift test: the mesh encloses no volume")
-    moments, axes = np.linalg.eigh(solid.moment_inertia * (mass / solid.volume))
-    if np.linalg.det(axes) < 0.0:
-        axes[:, 0] = -axes[:, 0]
-    return np.asarray(solid.center_mass, float), np.maximum(moments, 1e-12), axes
-
-
 def _quat(rotation: np.ndarray) -> list[float]:
     """pybullet quaternion (x, y, z, w) of a 3x3 rotation."""
     return Rotation.from_matrix(rotation).as_quat().tolist()
@@ -196,9 +113,16 @@ def _quat(rotation: np.ndarray) -> list[float]:
 
 def _set_surface(client: BulletClient, body: int, link: int, friction: float, config: LiftConfig) -> None:
     """Set every surface and damping property of one link explicitly."""
-    client.changeDynamics(body, link, lateralFriction=friction, spinningFriction=config.spinning_friction,
-                          rollingFriction=config.rolling_friction, restitution=config.restitution,
-                          linearDamping=0.0, angularDamping=0.0)
+    client.changeDynamics(
+        body,
+        link,
+        lateralFriction=friction,
+        spinningFriction=config.spinning_friction,
+        rollingFriction=config.rolling_friction,
+        restitution=config.restitution,
+        linearDamping=0.0,
+        angularDamping=0.0,
+    )
 
 
 def add_object(client: BulletClient, parts: list[trimesh.Trimesh], config: LiftConfig) -> int:
@@ -218,15 +142,21 @@ def add_object(client: BulletClient, parts: list[trimesh.Trimesh], config: LiftC
             with open(path, "w") as f:
                 f.write("\n".join(lines) + "\n")
             shape = client.createCollisionShape(pybullet.GEOM_MESH, fileName=path)
-    body = client.createMultiBody(baseMass=config.mass, baseCollisionShapeIndex=shape, basePosition=[0, 0, 0],
-                                  baseInertialFramePosition=com.tolist(), baseInertialFrameOrientation=_quat(axes))
+    body = client.createMultiBody(
+        baseMass=config.mass,
+        baseCollisionShapeIndex=shape,
+        basePosition=[0, 0, 0],
+        baseInertialFramePosition=com.tolist(),
+        baseInertialFrameOrientation=_quat(axes),
+    )
     client.changeDynamics(body, -1, localInertiaDiagonal=moments.tolist())
     _set_surface(client, body, -1, config.object_friction, config)
     return body
 
 
-def add_gripper(client: BulletClient, gripper: ParallelJawGripper, opening: float, pose: np.ndarray,
-                config: LiftConfig) -> int:
+def add_gripper(
+    client: BulletClient, gripper: ParallelJawGripper, opening: float, pose: np.ndarray, config: LiftConfig
+) -> int:
     """Add the floating gripper opened to ``opening``, its base frame (the grasp frame, also its centre of mass)
     at ``pose``; returns its body id. Links :data:`FINGER_LINKS` are the fingers, whose joint positions are how
     far each has moved inwards; a gear constraint keeps them equal."""
@@ -234,17 +164,33 @@ def add_gripper(client: BulletClient, gripper: ParallelJawGripper, opening: floa
     palm = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=hp.tolist(), collisionFramePosition=cp.tolist())
     fingers = [client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=h.tolist()) for h in (h1, h2)]
     body = client.createMultiBody(
-        baseMass=config.palm_mass, baseCollisionShapeIndex=palm, basePosition=pose[:3, 3].tolist(),
-        baseOrientation=_quat(pose[:3, :3]), linkMasses=[config.finger_mass] * 2,
-        linkCollisionShapeIndices=fingers, linkVisualShapeIndices=[-1, -1], linkPositions=[c1.tolist(), c2.tolist()],
-        linkOrientations=[[0, 0, 0, 1]] * 2, linkInertialFramePositions=[[0, 0, 0]] * 2,
-        linkInertialFrameOrientations=[[0, 0, 0, 1]] * 2, linkParentIndices=[0, 0],
-        linkJointTypes=[pybullet.JOINT_PRISMATIC] * 2, linkJointAxis=[[1, 0, 0], [-1, 0, 0]],
+        baseMass=config.palm_mass,
+        baseCollisionShapeIndex=palm,
+        basePosition=pose[:3, 3].tolist(),
+        baseOrientation=_quat(pose[:3, :3]),
+        linkMasses=[config.finger_mass] * 2,
+        linkCollisionShapeIndices=fingers,
+        linkVisualShapeIndices=[-1, -1],
+        linkPositions=[c1.tolist(), c2.tolist()],
+        linkOrientations=[[0, 0, 0, 1]] * 2,
+        linkInertialFramePositions=[[0, 0, 0]] * 2,
+        linkInertialFrameOrientations=[[0, 0, 0, 1]] * 2,
+        linkParentIndices=[0, 0],
+        linkJointTypes=[pybullet.JOINT_PRISMATIC] * 2,
+        linkJointAxis=[[1, 0, 0], [-1, 0, 0]],
     )
     for link in (-1, *FINGER_LINKS):
         _set_surface(client, body, link, config.finger_friction, config)
-    gear = client.createConstraint(body, FINGER_LINKS[0], body, FINGER_LINKS[1], pybullet.JOINT_GEAR,
-                                   jointAxis=[1, 0, 0], parentFramePosition=[0, 0, 0], childFramePosition=[0, 0, 0])
+    gear = client.createConstraint(
+        body,
+        FINGER_LINKS[0],
+        body,
+        FINGER_LINKS[1],
+        pybullet.JOINT_GEAR,
+        jointAxis=[1, 0, 0],
+        parentFramePosition=[0, 0, 0],
+        childFramePosition=[0, 0, 0],
+    )
     client.changeConstraint(gear, gearRatio=-1.0, erp=0.2, maxForce=config.drive_force)
     return body
 
@@ -252,8 +198,10 @@ def add_gripper(client: BulletClient, gripper: ParallelJawGripper, opening: floa
 def _touching(client: BulletClient, obj: int, grip: int, config: LiftConfig) -> int:
     """How many fingers touch the object (0, 1 or 2)."""
     tol = config.contact_tolerance
-    return sum(any(p[8] < tol for p in client.getClosestPoints(obj, grip, tol, linkIndexA=-1, linkIndexB=link))
-               for link in FINGER_LINKS)
+    return sum(
+        any(p[8] < tol for p in client.getClosestPoints(obj, grip, tol, linkIndexA=-1, linkIndexB=link))
+        for link in FINGER_LINKS
+    )
 
 
 def _ramp(duration: float, config: LiftConfig) -> np.ndarray:
@@ -276,8 +224,13 @@ def _checked_pose(pose: np.ndarray, width: float, gripper: ParallelJawGripper) -
     return pose
 
 
-def lift_test(mesh: trimesh.Trimesh, pose: np.ndarray, width: float,
-              gripper: ParallelJawGripper = ParallelJawGripper(), config: LiftConfig = LiftConfig()) -> LiftResult:
+def lift_test(
+    mesh: trimesh.Trimesh,
+    pose: np.ndarray,
+    width: float,
+    gripper: ParallelJawGripper = ParallelJawGripper(),
+    config: LiftConfig = LiftConfig(),
+) -> LiftResult:
     """Approach, close on, lift (10 cm) and hold (1 s) ``mesh`` with ``gripper`` in pybullet (module docstring).
 
     Deterministic, and independent of other calls but for the cached decomposition (:func:`convex_parts`).
@@ -297,8 +250,12 @@ def lift_test(mesh: trimesh.Trimesh, pose: np.ndarray, width: float,
     opening = min(width + config.open_margin, gripper.max_opening)
     client = BulletClient(connection_mode=pybullet.DIRECT)
     try:
-        client.setPhysicsEngineParameter(fixedTimeStep=config.time_step, numSolverIterations=config.solver_iterations,
-                                         numSubSteps=0, deterministicOverlappingPairs=1)
+        client.setPhysicsEngineParameter(
+            fixedTimeStep=config.time_step,
+            numSolverIterations=config.solver_iterations,
+            numSubSteps=0,
+            deterministicOverlappingPairs=1,
+        )
         client.setGravity(0.0, 0.0, 0.0)
         obj = add_object(client, parts, config)
         start = pose[:3, 3] - config.approach_distance * pose[:3, 2]
@@ -308,50 +265,86 @@ def lift_test(mesh: trimesh.Trimesh, pose: np.ndarray, width: float,
         client.disconnect()
 
 
-def _run(client: BulletClient, obj: int, grip: int, pose: np.ndarray, start: np.ndarray, opening: float,
-         config: LiftConfig) -> LiftResult:
+@dataclass
+class _Rig:
+    """The simulated gripper driven by a fixed constraint, its fingers, and the object it acts on."""
+
+    client: BulletClient
+    obj: int
+    grip: int
+    drive: int
+    orientation: list[float]
+    config: LiftConfig
+
+    @classmethod
+    def attach(cls, client: BulletClient, obj: int, grip: int, pose: np.ndarray, start: np.ndarray, config: LiftConfig):
+        """Fix the gripper at ``start`` with the orientation of ``pose`` through a constraint that will drive it."""
+        orientation = _quat(pose[:3, :3])
+        drive = client.createConstraint(
+            grip, -1, -1, -1, pybullet.JOINT_FIXED, jointAxis=[0, 0, 0], parentFramePosition=[0, 0, 0],
+            childFramePosition=start.tolist(), childFrameOrientation=orientation,
+        )  # fmt: skip
+        return cls(client, obj, grip, drive, orientation, config)
+
+    def fingers(self, target: float) -> None:
+        """Drive both fingers towards ``target`` (metres from the open position) with bounded force and speed."""
+        for link in FINGER_LINKS:
+            self.client.setJointMotorControl2(
+                self.grip, link, pybullet.POSITION_CONTROL, targetPosition=target,
+                force=self.config.gripping_force, maxVelocity=self.config.finger_speed,
+            )  # fmt: skip
+
+    def move(self, target: np.ndarray) -> None:
+        """One simulation step with the gripper pulled towards ``target``."""
+        self.client.changeConstraint(
+            self.drive,
+            jointChildPivot=target.tolist(),
+            jointChildFrameOrientation=self.orientation,
+            maxForce=self.config.drive_force,
+        )
+        self.client.stepSimulation()
+
+    def object_position(self) -> np.ndarray:
+        return np.asarray(self.client.getBasePositionAndOrientation(self.obj)[0])
+
+    def touching(self) -> int:
+        return _touching(self.client, self.obj, self.grip, self.config)
+
+
+def _run(
+    client: BulletClient, obj: int, grip: int, pose: np.ndarray, start: np.ndarray, opening: float, config: LiftConfig
+) -> LiftResult:
     """Steps 2-5 of the protocol; the gripper stands at ``start``, the object at rest."""
     client.performCollisionDetection()
     if any(p[8] < -config.penetration_tolerance for p in client.getClosestPoints(obj, grip, 0.0)):
         return LiftResult(False, 0.0, False, "collision at start")
-    orientation = _quat(pose[:3, :3])
-    drive = client.createConstraint(grip, -1, -1, -1, pybullet.JOINT_FIXED, jointAxis=[0, 0, 0],
-                                    parentFramePosition=[0, 0, 0], childFramePosition=start.tolist(),
-                                    childFrameOrientation=orientation)
-
-    def fingers(target: float) -> None:
-        for link in FINGER_LINKS:
-            client.setJointMotorControl2(grip, link, pybullet.POSITION_CONTROL, targetPosition=target,
-                                         force=config.gripping_force, maxVelocity=config.finger_speed)
-
-    def move(target: np.ndarray) -> None:
-        client.changeConstraint(drive, jointChildPivot=target.tolist(), jointChildFrameOrientation=orientation,
-                                maxForce=config.drive_force)
-        client.stepSimulation()
-
-    def object_position() -> np.ndarray:
-        return np.asarray(client.getBasePositionAndOrientation(obj)[0])
-
-    initial = object_position()
-    fingers(0.0)  # held open
+    rig = _Rig.attach(client, obj, grip, pose, start, config)
+    initial = rig.object_position()
+    rig.fingers(0.0)  # held open
     for s in _ramp(config.approach_time, config):
-        move(start + s * (pose[:3, 3] - start))
-    if np.linalg.norm(object_position() - initial) > config.approach_tolerance:
+        rig.move(start + s * (pose[:3, 3] - start))
+    if np.linalg.norm(rig.object_position() - initial) > config.approach_tolerance:
         return LiftResult(False, 0.0, False, "collision on approach")
-    fingers(opening / 2.0)  # the pads would meet at the grasp centre
+    rig.fingers(opening / 2.0)  # the pads would meet at the grasp centre
     for _ in _ramp(config.close_time, config):
-        move(pose[:3, 3])
-    if _touching(client, obj, grip, config) < 2:
+        rig.move(pose[:3, 3])
+    if rig.touching() < 2:
         return LiftResult(False, 0.0, False, "no contact")
-    client.setGravity(0.0, 0.0, -config.gravity)
-    before = object_position()
+    return _lift_and_hold(rig, pose[:3, 3])
+
+
+def _lift_and_hold(rig: _Rig, grasp_centre: np.ndarray) -> LiftResult:
+    """Steps 4-5: gravity on, lift by ``lift_height``, hold, and judge whether the object came along."""
+    config = rig.config
+    rig.client.setGravity(0.0, 0.0, -config.gravity)
+    before = rig.object_position()
     up = np.array([0.0, 0.0, config.lift_height])
     for s in _ramp(config.lift_time, config):
-        move(pose[:3, 3] + s * up)
+        rig.move(grasp_centre + s * up)
     for _ in _ramp(config.hold_time, config):
-        move(pose[:3, 3] + up)
-    lifted = float(object_position()[2] - before[2])
-    if _touching(client, obj, grip, config) < 2:
+        rig.move(grasp_centre + up)
+    lifted = float(rig.object_position()[2] - before[2])
+    if rig.touching() < 2:
         return LiftResult(False, lifted, False, "dropped")
     if lifted < config.success_fraction * config.lift_height:
         return LiftResult(False, lifted, True, "slipped")

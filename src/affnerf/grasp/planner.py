@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from affnerf.errors import AffnerfError
-from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
 from affnerf.grasp.contacts import close_jaws, score_contacts
-from affnerf.grasp.target import GraspObject
+from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
 from affnerf.grasp.quality import MU
 from affnerf.grasp.refine import RefineConfig, refine_grasps
+from affnerf.grasp.target import GraspObject
 from affnerf.vocab import affordance_id
 
 
@@ -91,7 +91,12 @@ def allowed_faces(obj: GraspObject, affordance: str) -> np.ndarray | None:
 
 
 def sample_antipodal(
-    obj: GraspObject, count: int, rng: np.random.Generator, mask: np.ndarray | None, mu: float, gripper: ParallelJawGripper
+    obj: GraspObject,
+    count: int,
+    rng: np.random.Generator,
+    mask: np.ndarray | None,
+    mu: float,
+    gripper: ParallelJawGripper,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Antipodal candidate pairs: a surface point, a ray into the object within half the friction cone, and
     the surface where it comes out, both on allowed faces and within the opening.
@@ -133,7 +138,12 @@ def _approaches(axes: np.ndarray, per_pair: int, rng: np.random.Generator) -> np
 
 
 def collides(
-    poses: np.ndarray, widths: np.ndarray, gripper: ParallelJawGripper, points: np.ndarray, tolerance: float, chunk: int = 32
+    poses: np.ndarray,
+    widths: np.ndarray,
+    gripper: ParallelJawGripper,
+    points: np.ndarray,
+    tolerance: float,
+    chunk: int = 32,
 ) -> np.ndarray:
     """(G,) whether the gripper (at each opening) cuts into the object: surface points (P, 3) deeper than
     ``tolerance`` inside a finger or the palm."""
@@ -167,7 +177,9 @@ def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, ang
     return kept
 
 
-def plan_grasps(obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()) -> list[Grasp]:
+def plan_grasps(
+    obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()
+) -> list[Grasp]:
     """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks)."""
     rng = np.random.default_rng(config.seed)
     mask = allowed_faces(obj, config.affordance)
@@ -179,10 +191,18 @@ def plan_grasps(obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: Pa
     surface, faces = obj.sample_surface(config.surface_samples, rng, mask)
     if config.refine.steps > 0:
         centres, axes, approaches, widths = refine_grasps(
-            centres, axes, approaches, widths, surface, obj.face_normals[faces], obj.centroid, obj.radius, gripper,
+            centres,
+            axes,
+            approaches,
+            widths,
+            surface,
+            obj.face_normals[faces],
+            obj.centroid,
+            obj.radius,
+            gripper,
             config.refine,
-        )  # fmt: skip
-    poses = np.stack([grasp_pose(c, a, r) for c, a, r in zip(centres, axes, approaches)])
+        )
+    poses = np.stack([grasp_pose(c, a, r) for c, a, r in zip(centres, axes, approaches, strict=True)])
     contacts = close_jaws(obj, poses, gripper)
     check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
     valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
@@ -193,6 +213,12 @@ def plan_grasps(obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: Pa
     order = candidates[np.argsort(-epsilon[candidates], kind="stable")]
     kept = _suppress(poses, order)[: config.num]
     return [
-        Grasp(poses[i], float(contacts.width[i]), contacts.points[i], float(epsilon[i]), obj.label_names(contacts.faces[i]))
+        Grasp(
+            poses[i],
+            float(contacts.width[i]),
+            contacts.points[i],
+            float(epsilon[i]),
+            obj.label_names(contacts.faces[i]),
+        )
         for i in kept
     ]

@@ -119,6 +119,9 @@ def ferrari_canny(
     """Epsilon quality of contacts (K, 3) with inward normals (K, 3) on an object (centroid, radius); pass the
     grasp's approach axis as ``reference`` for a value independent of the world frame."""
     wrenches = np.concatenate(
-        [contact_wrenches(p, n, centroid, radius, mu, edges, torsion, reference) for p, n in zip(points, inward)]
+        [
+            contact_wrenches(p, n, centroid, radius, mu, edges, torsion, reference)
+            for p, n in zip(points, inward, strict=True)
+        ]
     )
     return hull_margin(wrenches)

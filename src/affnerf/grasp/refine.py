@@ -131,8 +131,12 @@ def refine_grasps(
         centres (G, 3), unit axes (G, 3), unit approaches orthogonal to them (G, 3), widths (G,).
     """
     as_t = lambda a: torch.as_tensor(np.asarray(a), dtype=torch.float32)  # noqa: E731
-    params = [as_t(centres).clone().requires_grad_(), as_t(axes).clone().requires_grad_(),
-              as_t(approaches).clone().requires_grad_(), as_t(widths).clone().requires_grad_()]  # fmt: skip
+    params = [
+        as_t(centres).clone().requires_grad_(),
+        as_t(axes).clone().requires_grad_(),
+        as_t(approaches).clone().requires_grad_(),
+        as_t(widths).clone().requires_grad_(),
+    ]
     surf, norm, cen = as_t(surface), as_t(normals), as_t(centroid)
     optimizer = torch.optim.Adam(params, lr=config.lr)
     for _ in range(config.steps):
@@ -142,5 +146,9 @@ def refine_grasps(
         optimizer.step()
     with torch.no_grad():
         rot = _frames(params[1], params[2])
-    return (params[0].detach().numpy().astype(np.float64), rot[..., 0].numpy().astype(np.float64),
-            rot[..., 2].numpy().astype(np.float64), params[3].detach().numpy().astype(np.float64))  # fmt: skip
+    return (
+        params[0].detach().numpy().astype(np.float64),
+        rot[..., 0].numpy().astype(np.float64),
+        rot[..., 2].numpy().astype(np.float64),
+        params[3].detach().numpy().astype(np.float64),
+    )

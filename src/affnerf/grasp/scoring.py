@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.contacts import close_jaws, score_contacts
-from affnerf.grasp.target import GraspObject
+from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.quality import MU
+from affnerf.grasp.target import GraspObject
 
 
 @dataclass
@@ -35,8 +35,13 @@ class GraspScore:
         return self.valid and all(a == affordance for a in self.affordance)
 
     def to_json(self) -> dict:
-        return {"epsilon": self.epsilon, "width": round(self.width, 6), "contacts": np.round(self.contacts, 6).tolist(),
-                "affordance": self.affordance, "valid": self.valid}  # fmt: skip
+        return {
+            "epsilon": self.epsilon,
+            "width": round(self.width, 6),
+            "contacts": np.round(self.contacts, 6).tolist(),
+            "affordance": self.affordance,
+            "valid": self.valid,
+        }
 
 
 def score_grasps(

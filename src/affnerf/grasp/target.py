@@ -39,8 +39,12 @@ class GraspObject:
         labels = mesh.face_props.get("affordance")
         if labels is None and "affordance" in mesh.vertex_props:
             labels = majority_face_labels(mesh.faces, np.asarray(mesh.vertex_props["affordance"]))
-        return cls(np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64),
-                   None if labels is None else np.asarray(labels, np.int64), name)  # fmt: skip
+        return cls(
+            np.asarray(mesh.vertices, np.float64),
+            np.asarray(mesh.faces, np.int64),
+            None if labels is None else np.asarray(labels, np.int64),
+            name,
+        )
 
     @property
     def caster(self) -> RayCaster:
@@ -74,7 +78,10 @@ class GraspObject:
         """Affordance names of faces (``unlabelled`` for a mesh without labels)."""
         if self.face_affordance is None:
             return ["unlabelled"] * len(faces)
-        return [AFFORDANCE_CLASSES[int(c)] if 0 <= c < len(AFFORDANCE_CLASSES) else str(int(c)) for c in self.face_affordance[faces]]
+        return [
+            AFFORDANCE_CLASSES[int(c)] if 0 <= c < len(AFFORDANCE_CLASSES) else str(int(c))
+            for c in self.face_affordance[faces]
+        ]
 
     def sample_surface(
         self, count: int, rng: np.random.Generator, face_mask: np.ndarray | None = None

@@ -71,7 +71,8 @@ class ConditionedNeRF(nn.Module, ABC):
         background: torch.Tensor,
         num: int = 32,
     ) -> RayOutputs:
-        """Render rays of one encoded object with empty-space skipping (see :meth:`FieldRenderer.render_rays_in_grid`)."""
+        """Render rays of one encoded object with empty-space skipping (see
+        :meth:`FieldRenderer.render_rays_in_grid`)."""
         obj = torch.zeros(len(origins), dtype=torch.long, device=origins.device)
         return self.renderer.render_rays_in_grid(self.condition(encoding, obj), grid, origins, dirs, background, num)
 
@@ -81,7 +82,9 @@ class ConditionedNeRF(nn.Module, ABC):
         density, _ = self.point_fields(encoding)
         level = self.config.occupancy_density if threshold is None else threshold
         device = next(self.parameters()).device
-        return build_grid(density, self.config.scene_half_extent, resolution, level, chunk=POINTS_PER_CHUNK, device=device)
+        return build_grid(
+            density, self.config.scene_half_extent, resolution, level, chunk=POINTS_PER_CHUNK, device=device
+        )
 
     def forward(
         self,

@@ -7,7 +7,6 @@ from typing import Literal
 
 from affnerf.objects.asset import CANONICAL_HALF_EXTENT
 
-
 #: Rays per forward pass when rendering whole images, unless told otherwise: on a CPU about a thousand is fastest
 #: (larger chunks spill the caches); on a GPU pass a larger ``--chunk``.
 RAYS_PER_CHUNK = 1024
@@ -69,5 +68,13 @@ class ModelConfig:
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint
 #: may be resumed or loaded with other values of these.
-NON_ARCHITECTURE_FIELDS = ("num_coarse", "num_fine", "near", "far", "clip_to_cube", "scene_half_extent", "surface_density",
-                          "occupancy_density")
+NON_ARCHITECTURE_FIELDS = (
+    "num_coarse",
+    "num_fine",
+    "near",
+    "far",
+    "clip_to_cube",
+    "scene_half_extent",
+    "surface_density",
+    "occupancy_density",
+)

@@ -70,9 +70,13 @@ class ConditionalField(nn.Module):
         self.trunk_layers = nn.ModuleList(layers)
         self.density = nn.Linear(width, 1)
         self.feature = nn.Linear(width, width)
-        self.affordance = nn.Sequential(nn.Linear(width, affordance_width), nn.ReLU(), nn.Linear(affordance_width, num_classes - 1))
+        self.affordance = nn.Sequential(
+            nn.Linear(width, affordance_width), nn.ReLU(), nn.Linear(affordance_width, num_classes - 1)
+        )
         self.color = nn.Sequential(
-            nn.Linear(width + encoding_dim(3, pe_dir) + color_code_dim, color_width), nn.ReLU(), nn.Linear(color_width, 3)
+            nn.Linear(width + encoding_dim(3, pe_dir) + color_code_dim, color_width),
+            nn.ReLU(),
+            nn.Linear(color_width, 3),
         )
 
     def trunk(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:

@@ -81,7 +81,9 @@ class PixelNeRF(ConditionedNeRF):
         b, v = images.shape[:2]
         stages = self.backbone(images.reshape(b * v, *images.shape[2:]))
         size = stages[0].shape[-2:]
-        stacked = torch.cat([stages[0]] + [F.interpolate(s, size=size, mode="bilinear", align_corners=False) for s in stages[1:]], 1)
+        stacked = torch.cat(
+            [stages[0]] + [F.interpolate(s, size=size, mode="bilinear", align_corners=False) for s in stages[1:]], 1
+        )
         return PixelEncoding(
             features=stacked.reshape(b, v, *stacked.shape[1:]),
             intrinsics=intrinsics,
@@ -95,7 +97,9 @@ class PixelNeRF(ConditionedNeRF):
         for v in range(encoding.features.shape[1]):
             cam, pix = project(points, encoding.world_to_camera[b, v], encoding.intrinsics[b, v])
             grid = (pix / encoding.size * 2.0 - 1.0)[None, :, None, :]
-            feat = F.grid_sample(encoding.features[b, v][None], grid, mode="bilinear", padding_mode="border", align_corners=False)
+            feat = F.grid_sample(
+                encoding.features[b, v][None], grid, mode="bilinear", padding_mode="border", align_corners=False
+            )
             feat = feat[0, :, :, 0].T  # (N, C)
             views.append(self.view_net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
         return torch.stack(views).mean(0)

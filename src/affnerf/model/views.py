@@ -76,7 +76,9 @@ def render_view(
         if grid is not None:
             out = model.render_rays_in_grid(encoding, grid, o, d, bg.expand(n, 3), grid_samples)
         else:
-            coarse, fine = model.render_rays(encoding, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3))
+            coarse, fine = model.render_rays(
+                encoding, torch.zeros(n, dtype=torch.long, device=device), o, d, bg.expand(n, 3)
+            )
             out = fine if fine is not None else coarse
         rgb.append(out.rgb.cpu())
         opacity.append(out.opacity.cpu())

@@ -10,9 +10,7 @@ from PIL import Image, ImageDraw, ImageFont
 from affnerf.vocab import AFFORDANCE_PALETTE, colorize_labels
 
 #: Anchor colours of the depth colour map, near (warm) to far (cool).
-_DEPTH_ANCHORS = np.array(
-    [[253, 231, 37], [94, 201, 98], [33, 145, 140], [59, 82, 139], [68, 1, 84]], dtype=np.float64
-)
+_DEPTH_ANCHORS = np.array([[253, 231, 37], [94, 201, 98], [33, 145, 140], [59, 82, 139], [68, 1, 84]], dtype=np.float64)
 
 
 def depth_to_color(depth: np.ndarray, near: float | None = None, far: float | None = None) -> np.ndarray:
@@ -91,9 +89,7 @@ def grid(rows: Sequence[Sequence[np.ndarray]], pad: int = 2, fill: int = 255) ->
     tile_h = max(im.shape[0] for row in rows for im in row)
     tile_w = max(im.shape[1] for row in rows for im in row)
     ncols = max(len(row) for row in rows)
-    out = np.full(
-        (len(rows) * (tile_h + pad) + pad, ncols * (tile_w + pad) + pad, 3), fill, dtype=np.uint8
-    )
+    out = np.full((len(rows) * (tile_h + pad) + pad, ncols * (tile_w + pad) + pad, 3), fill, dtype=np.uint8)
     for r, row in enumerate(rows):
         for c, im in enumerate(row):
             y, x = pad + r * (tile_h + pad), pad + c * (tile_w + pad)
@@ -105,7 +101,9 @@ def stack_rows(parts: Sequence[np.ndarray], fill: int = 255) -> np.ndarray:
     """Stack images vertically, padding narrower ones on the right."""
     width = max(p.shape[1] for p in parts)
     padded = [
-        np.concatenate([p, np.full((p.shape[0], width - p.shape[1], 3), fill, np.uint8)], 1) if p.shape[1] < width else p
+        np.concatenate([p, np.full((p.shape[0], width - p.shape[1], 3), fill, np.uint8)], 1)
+        if p.shape[1] < width
+        else p
         for p in parts
     ]
     return np.concatenate(padded, 0)

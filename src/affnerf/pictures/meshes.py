@@ -25,11 +25,14 @@ def coloured_surface(vertices: np.ndarray, faces: np.ndarray, face_colors: np.nd
     colors, material = np.unique(np.round(np.asarray(face_colors, np.float64), 3), axis=0, return_inverse=True)
     n = len(faces)
     return SurfaceMesh(
-        vertices=np.asarray(vertices, np.float64), faces=np.asarray(faces, np.int64),
-        face_part=np.ones(n, np.uint8), face_affordance=np.zeros(n, np.uint8),
-        face_material=material.reshape(-1).astype(np.int32), face_uv=np.zeros((n, 3, 2), np.float32),
+        vertices=np.asarray(vertices, np.float64),
+        faces=np.asarray(faces, np.int64),
+        face_part=np.ones(n, np.uint8),
+        face_affordance=np.zeros(n, np.uint8),
+        face_material=material.reshape(-1).astype(np.int32),
+        face_uv=np.zeros((n, 3, 2), np.float32),
         materials=[Material(tuple(c)) for c in colors],
-    )  # fmt: skip
+    )
 
 
 def views_around(

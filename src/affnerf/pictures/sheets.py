@@ -57,7 +57,9 @@ def preview_sheet(
                 h = round(tile.shape[0] * tile_width / tile.shape[1])
                 tiles.append(np.asarray(Image.fromarray(tile).resize((tile_width, h), Image.NEAREST)))
         body = grid([tiles], pad=2)
-        rows.append(stack_rows([text_strip(f"{entry.id} ({entry.split})  rgb | depth | affordance", body.shape[1]), body]))
+        rows.append(
+            stack_rows([text_strip(f"{entry.id} ({entry.split})  rgb | depth | affordance", body.shape[1]), body])
+        )
     sheet = stack_rows(rows)
     ids = sorted(c for c in present if c > 0)
     return stack_rows([sheet, legend(ids, ds.affordance_classes, sheet.shape[1])])
@@ -81,11 +83,16 @@ def overview_sheet(folders: Sequence[Path], height: int = 150) -> np.ndarray | N
         turntable = sorted((folder / "turntable").glob("*.png"))
         if original is None or not turntable or not (folder / "mesh_preview.png").is_file():
             continue
-        row = [fit_height(np.asarray(Image.open(p)), height) for p in (original, turntable[len(turntable) // 6], folder / "mesh_preview.png")]
+        row = [
+            fit_height(np.asarray(Image.open(p)), height)
+            for p in (original, turntable[len(turntable) // 6], folder / "mesh_preview.png")
+        ]
         if (folder / "grasps" / "grasps.png").is_file():
             row.append(fit_height(np.asarray(Image.open(folder / "grasps" / "grasps.png")), height))
         rows.append(np.concatenate([np.pad(im, ((0, 0), (0, 4), (0, 0)), constant_values=255) for im in row], axis=1))
     if not rows:
         return None
-    header = text_strip("input   |   novel view: colour | affordance   |   labelled mesh   |   grasps", rows[0].shape[1])
+    header = text_strip(
+        "input   |   novel view: colour | affordance   |   labelled mesh   |   grasps", rows[0].shape[1]
+    )
     return stack_rows([header, *[np.pad(r, ((0, 4), (0, 0), (0, 0)), constant_values=255) for r in rows]])

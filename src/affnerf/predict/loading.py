@@ -9,8 +9,8 @@ import torch
 
 from affnerf.errors import input_error
 from affnerf.model.base import ConditionedNeRF
-from affnerf.model.registry import build_model
 from affnerf.model.config import ModelConfig
+from affnerf.model.registry import build_model
 from affnerf.train.checkpoint import list_checkpoints, load_checkpoint
 
 
@@ -66,7 +66,9 @@ def load_model(path: Path, device: str | torch.device = "cpu") -> LoadedModel:
         model = build_model(config, int(data["num_classes"]))
         model.load_state_dict(data["model"])
     except (KeyError, TypeError, RuntimeError) as exc:
-        raise input_error(ckpt, f"checkpoint does not match this version's model ({' '.join(str(exc).split())[:200]})") from None
+        raise input_error(
+            ckpt, f"checkpoint does not match this version's model ({' '.join(str(exc).split())[:200]})"
+        ) from None
     model.to(device).eval()
     background = tuple(float(c) for c in data.get("background", (1.0, 1.0, 1.0)))
     return LoadedModel(

@@ -22,7 +22,6 @@ from affnerf.vocab import colorize_labels
 PointFn = Callable[[torch.Tensor], torch.Tensor]
 
 
-
 def grid_axis(resolution: int, half_extent: float) -> np.ndarray:
     """(resolution,) coordinates of grid samples along one axis, from -half_extent to +half_extent inclusive."""
     return np.linspace(-half_extent, half_extent, resolution)
@@ -105,7 +104,9 @@ def extract_labelled_mesh(
     """
     volume = evaluate_grid(density, resolution, half_extent, chunk, occupancy)
     vertices, faces = marching_cubes(volume, level, half_extent)
-    vertex_labels = evaluate_points(labels, vertices, chunk).astype(np.int64) if len(vertices) else np.zeros(0, np.int64)
+    vertex_labels = (
+        evaluate_points(labels, vertices, chunk).astype(np.int64) if len(vertices) else np.zeros(0, np.int64)
+    )
     return LabelledMesh(
         vertices=vertices,
         faces=faces,
@@ -133,8 +134,9 @@ def model_mesh(
     """
     density, labels = model.point_fields(encoding)
     surface = model.config.surface_density if level is None else level
-    return extract_labelled_mesh(density, labels, resolution, surface, model.config.scene_half_extent,
-                                 occupancy=occupancy)  # fmt: skip
+    return extract_labelled_mesh(
+        density, labels, resolution, surface, model.config.scene_half_extent, occupancy=occupancy
+    )
 
 
 def class_areas(mesh: LabelledMesh) -> dict[int, float]:

@@ -94,7 +94,11 @@ class Predictor:
         """Load from a run folder or checkpoint file (an AFF-NeRF: prediction from a photo needs no pose)."""
         loaded = load_model(Path(path), pick_device(device))
         if loaded.model.config.kind != "affnerf":
-            raise input_error(loaded.path, f"a {loaded.model.config.kind} model needs the input camera's pose; predict from photos with an AFF-NeRF run")
+            raise input_error(
+                loaded.path,
+                f"a {loaded.model.config.kind} model needs the input camera's pose; "
+                "predict from photos with an AFF-NeRF run",
+            )
         return cls(loaded, chunk, **options)  # type: ignore[arg-type]
 
     def grid(self, obj: EncodedObject) -> OccupancyGrid:
@@ -122,8 +126,9 @@ class Predictor:
     def render(self, obj: EncodedObject, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
         """Render the object from a camera in its canonical frame."""
         grid = self.grid(obj) if self.fast else None
-        return render_view(self.loaded.model, obj.codes, intrinsics, c2w, self.loaded.background, self.chunk,
-                           grid, self.grid_samples)  # fmt: skip
+        return render_view(
+            self.loaded.model, obj.codes, intrinsics, c2w, self.loaded.background, self.chunk, grid, self.grid_samples
+        )
 
     def surface_level(self, level: float | None = None) -> float:
         """The density of extracted surfaces: ``level`` when given, else the model config's ``surface_density``."""

@@ -20,7 +20,16 @@ from affnerf.train.checkpoint import load_checkpoint
 SHIPPED_NAME = "affnerf-small.pt"
 
 #: Checkpoint entries that inference reads (:func:`affnerf.predict.loading.load_model`).
-INFERENCE_KEYS = ("format", "step", "model", "model_config", "num_classes", "affordance_classes", "background", "train_config")
+INFERENCE_KEYS = (
+    "format",
+    "step",
+    "model",
+    "model_config",
+    "num_classes",
+    "affordance_classes",
+    "background",
+    "train_config",
+)
 
 
 def shipped_model() -> Path:

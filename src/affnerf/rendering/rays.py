@@ -5,9 +5,7 @@ from __future__ import annotations
 import torch
 
 
-def pixel_rays(
-    pixels: torch.Tensor, intrinsics: torch.Tensor, c2w: torch.Tensor
-) -> tuple[torch.Tensor, torch.Tensor]:
+def pixel_rays(pixels: torch.Tensor, intrinsics: torch.Tensor, c2w: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """World rays through pixel centres.
 
     Args:

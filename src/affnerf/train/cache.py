@@ -2,8 +2,8 @@
 
 For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W) affordance ids, ``crops.npy``
 (N, S, S, 3) encoder crops, the object's pixels of every frame (``fg_pixels.npy``, flat indices, frame i's
-between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the source
-``transforms.json``, so a regenerated object is decoded again). Folders are written under a temporary name and
+between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the
+source ``transforms.json``, so a regenerated object is decoded again). Folders are written under a temporary name and
 renamed, so a crash never leaves a half cache that looks complete.
 """
 
@@ -87,8 +87,18 @@ def frames_from_arrays(
     """
     offsets, pixels = foreground_index(labels)
     n = len(rgb)
-    return ObjectFrames(object_id, rgb, labels, np.zeros((n, 1, 1, 3), np.uint8), np.zeros((n, 4)), offsets, pixels,
-                        np.asarray(poses, np.float64), np.asarray(intrinsics, np.float64), np.asarray(background, np.float64))  # fmt: skip
+    return ObjectFrames(
+        object_id,
+        rgb,
+        labels,
+        np.zeros((n, 1, 1, 3), np.uint8),
+        np.zeros((n, 4)),
+        offsets,
+        pixels,
+        np.asarray(poses, np.float64),
+        np.asarray(intrinsics, np.float64),
+        np.asarray(background, np.float64),
+    )
 
 
 def _resize(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarray:

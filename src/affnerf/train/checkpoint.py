@@ -62,7 +62,9 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for damaged files
-        raise input_error(path, f"not a readable checkpoint ({type(exc).__name__}: {' '.join(str(exc).split())[:160]})") from None
+        raise input_error(
+            path, f"not a readable checkpoint ({type(exc).__name__}: {' '.join(str(exc).split())[:160]})"
+        ) from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         found = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise input_error(path, f"not an affnerf checkpoint (format {found!r}, expected {FORMAT!r})")
@@ -74,8 +76,11 @@ def check_compatible(data: dict[str, Any], model: ModelConfig, num_classes: int,
     saved = data.get("model_config", {})
     ours = dataclasses.asdict(model)
     arch_keys = [k for k in ours if k not in NON_ARCHITECTURE_FIELDS]
-    diff = [f"{k} {saved.get(k, 'affnerf' if k == 'kind' else None)!r} vs {ours[k]!r}" for k in arch_keys
-            if saved.get(k, "affnerf" if k == "kind" else None) != ours[k]]  # fmt: skip
+    diff = [
+        f"{k} {saved.get(k, 'affnerf' if k == 'kind' else None)!r} vs {ours[k]!r}"
+        for k in arch_keys
+        if saved.get(k, "affnerf" if k == "kind" else None) != ours[k]
+    ]
     if diff:
         raise input_error(path, f"checkpoint is from another configuration ({'; '.join(diff)})")
     if data.get("num_classes") != num_classes:

@@ -13,8 +13,7 @@ from typing import Any, Literal
 
 from affnerf.errors import AffnerfError, input_error
 from affnerf.fileio import read_json_file
-from affnerf.model.config import ModelConfig
-from affnerf.model.config import RAYS_PER_CHUNK
+from affnerf.model.config import RAYS_PER_CHUNK, ModelConfig
 
 
 @dataclass(frozen=True)

@@ -72,9 +72,7 @@ class LogScalars:
         self.ctx, self.logger, self.bar, self.started = ctx, logger, bar, started
         self.window_start, self.window_rays = time.perf_counter(), 0
 
-    def __call__(
-        self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool
-    ) -> None:
+    def __call__(self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool) -> None:
         """Count the iteration's rays; on a logging step, log and restart the throughput window."""
         self.window_rays += self.rays_per_step
         if not due(step, self.every, self.last):
@@ -106,9 +104,7 @@ class AdvanceProgress:
     def __init__(self, bar: tqdm) -> None:
         self.bar = bar
 
-    def __call__(
-        self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool
-    ) -> None:
+    def __call__(self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool) -> None:
         self.bar.update(1)
 
 
@@ -122,9 +118,7 @@ class SaveCheckpoints:
         """Save every ``every`` steps and at step ``end`` (``stop_at`` when set, else the run's last step)."""
         self.every, self.end, self.save = every, end, save
 
-    def __call__(
-        self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool
-    ) -> None:
+    def __call__(self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool) -> None:
         if due(step, self.every, self.end) or out_of_time:
             self.save(step)
 
@@ -141,9 +135,7 @@ class Validate:
         """Validate ``model`` (unwrapped) on ``objects`` at ``config.val_scale`` of their resolution."""
         self.config, self.model, self.objects, self.logger = config, model, objects, logger
 
-    def __call__(
-        self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool
-    ) -> None:
+    def __call__(self, *, step: int, outputs: IterationOutputs, scalars: dict[str, float], out_of_time: bool) -> None:
         config = self.config
         if not due(step, config.val_every, config.steps):
             return

@@ -18,6 +18,7 @@ import torch
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames
 
+
 @dataclass
 class RayBatch:
     """One training step's data.
@@ -122,7 +123,8 @@ class RaySampler:
         for o in objects:
             if len(o) < input_views + 1:
                 raise ValueError(
-                    f"object {o.object_id} has {len(o)} views; {input_views} encoded and at least one for rays are needed"
+                    f"object {o.object_id} has {len(o)} views; "
+                    f"{input_views} encoded and at least one for rays are needed"
                 )
         self.input_views = input_views
         self.objects = objects
@@ -157,7 +159,7 @@ class RaySampler:
         counts = np.full(len(chosen), self.rays_per_step // len(chosen))
         counts[: self.rays_per_step % len(chosen)] += 1
         images, enc_views, parts = [], [], []
-        for slot, (oi, count) in enumerate(zip(chosen, counts)):
+        for slot, (oi, count) in enumerate(zip(chosen, counts, strict=True)):
             obj = self.objects[oi]
             enc = self.rng.choice(len(obj), self.input_views, replace=False)
             views = other_views(self.rng, len(obj), enc, int(count))

@@ -108,6 +108,8 @@ class TrainingState:
         else:
             log.warning(
                 "%s: saved by %d processes, resumed by %d; data order and random state restart from the seed",
-                path, len(states), ctx.world,
-            )  # fmt: skip
+                path,
+                len(states),
+                ctx.world,
+            )
         return int(data["step"])

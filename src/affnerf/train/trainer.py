@@ -150,9 +150,15 @@ class Trainer:
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
         optimizer = torch.optim.Adam(model.parameters(), lr=config.optim.lr)
         sampler = RaySampler(
-            frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, config.seed, ctx.rank,
-            ctx.world, config.input_views,
-        )  # fmt: skip
+            frames,
+            config.objects_per_step,
+            config.rays_per_step,
+            config.foreground_fraction,
+            config.seed,
+            ctx.rank,
+            ctx.world,
+            config.input_views,
+        )
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         return TrainingState(model, optimizer, sampler, generator)
 
@@ -201,9 +207,16 @@ class Trainer:
             group["lr"] = lr
         batch = state.sampler.next_batch().to(self.ctx.device)
         coarse, fine = self.net(
-            batch.images, batch.input_intrinsics, batch.input_poses, batch.ray_object, batch.origins, batch.dirs,
-            batch.background, True, state.generator,
-        )  # fmt: skip
+            batch.images,
+            batch.input_intrinsics,
+            batch.input_poses,
+            batch.ray_object,
+            batch.origins,
+            batch.dirs,
+            batch.background,
+            True,
+            state.generator,
+        )
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight)
         state.optimizer.zero_grad(set_to_none=True)
         terms.total.backward()

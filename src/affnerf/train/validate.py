@@ -12,8 +12,8 @@ from affnerf.data.dataset import ObjectData
 from affnerf.metrics.image import psnr
 from affnerf.metrics.segmentation import confusion_matrix, mean_iou, pixel_accuracy
 from affnerf.model.base import ConditionedNeRF
-from affnerf.model.inputs import dataset_views
 from affnerf.model.config import RAYS_PER_CHUNK
+from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
 from affnerf.pictures.compose import depth_to_color, overlay_affordance
 

@@ -11,8 +11,8 @@ import numpy as np
 import trimesh
 
 from affnerf.errors import input_error
-from affnerf.meshio import majority_face_labels, read_labelled_ply
 from affnerf.grasp.gripper import ParallelJawGripper
+from affnerf.meshio import majority_face_labels, read_labelled_ply
 from affnerf.vocab import AFFORDANCE_CLASSES, colorize_labels
 
 #: Colour and name of faces labelled 0 (background): grey, so that they stay visible.
@@ -150,7 +150,7 @@ def load_grasps(path: Path) -> list[GraspModel]:
     data = json.loads(Path(path).read_text())
     hand = _gripper_from(data.get("gripper"))
     out = []
-    for rank, ((pose, width), entry) in enumerate(zip(poses, data["grasps"])):
+    for rank, ((pose, width), entry) in enumerate(zip(poses, data["grasps"], strict=True)):
         mesh = trimesh.util.concatenate(hand.meshes(width))
         mesh.apply_transform(pose)
         eps = entry.get("epsilon")

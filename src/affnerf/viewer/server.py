@@ -142,9 +142,14 @@ def _add_parts(server: viser.ViserServer, parts: list[MeshPart], handles: SceneH
             toggle.on_update(_visibility_setter(node, toggle))
             handles.meshes[p.label], handles.toggles[p.label] = node, toggle
     server.scene.add_grid(
-        "/ground", width=4 * handles.radius, height=4 * handles.radius, plane="xy", cell_size=0.05,
-        section_size=0.25, position=(handles.centre[0], handles.centre[1], lo[2]),
-    )  # fmt: skip
+        "/ground",
+        width=4 * handles.radius,
+        height=4 * handles.radius,
+        plane="xy",
+        cell_size=0.05,
+        section_size=0.25,
+        position=(handles.centre[0], handles.centre[1], lo[2]),
+    )
 
 
 def _visibility_setter(node: viser.SceneNodeHandle, toggle: viser.GuiCheckboxHandle):
@@ -202,9 +207,17 @@ def _add_camera(
     distance = float(np.linalg.norm(camera.c2w[:3, 3] - handles.centre))
     scale = float(np.clip(0.6 * handles.radius, 0.01, 0.5 * distance))  # about the object's size
     handles.frustum = server.scene.add_camera_frustum(
-        "/input_camera", fov=camera.fov_y, aspect=camera.aspect, scale=scale, image=image, wxyz=wxyz,
-        position=c2w_cv[:3, 3], color=(40, 40, 40), thickness=2.0, thickness_units="screen",
-    )  # fmt: skip
+        "/input_camera",
+        fov=camera.fov_y,
+        aspect=camera.aspect,
+        scale=scale,
+        image=image,
+        wxyz=wxyz,
+        position=c2w_cv[:3, 3],
+        color=(40, 40, 40),
+        thickness=2.0,
+        thickness_units="screen",
+    )
     with server.gui.add_folder("Input"):
         if image is not None:
             name = camera.image.name if camera.image is not None else "input"

@@ -6,7 +6,6 @@ without children) lists the OBJ files (names without ``.obj``) that make it up.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any

@@ -10,8 +10,8 @@ from affnerf.data.dataset import ObjectData
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import Prediction, TargetSet
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
-from affnerf.model.inputs import dataset_views
 from affnerf.model.config import RAYS_PER_CHUNK
+from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.predictor import pick_device
@@ -52,7 +52,8 @@ class ConditionedNeRFMethod:
 
 
 def load_run(context: MethodContext, kind: str, method: str) -> LoadedModel:
-    """The run of ``context`` for ``method``, checked to be a ``kind`` model trained with the dataset's affordance classes.
+    """The run of ``context`` for ``method``, checked to be a ``kind`` model trained with the dataset's affordance
+    classes.
 
     Raises:
         AffnerfError: naming the checkpoint, when it is another kind of model or has other classes.
@@ -62,7 +63,9 @@ def load_run(context: MethodContext, kind: str, method: str) -> LoadedModel:
     if found != kind:
         raise AffnerfError(f"{loaded.path}: method {method} needs a run of kind {kind}, this run is of kind {found}")
     if loaded.classes != context.dataset.affordance_classes:
-        raise AffnerfError(f"{loaded.path}: trained with other affordance classes than {context.dataset.root / 'dataset.json'}")
+        raise AffnerfError(
+            f"{loaded.path}: trained with other affordance classes than {context.dataset.root / 'dataset.json'}"
+        )
     return loaded
 
 
@@ -70,5 +73,9 @@ def _build(kind: str):
     return lambda context: ConditionedNeRFMethod(load_run(context, kind, kind), context.chunk, context.fast)
 
 
-register_method(MethodSpec("affnerf", _build("affnerf"), "AFF-NeRF: global shape and appearance codes from the input view(s)"))
-register_method(MethodSpec("pixelnerf", _build("pixelnerf"), "PixelNeRF-M: pixel-aligned features at the posed input views"))
+register_method(
+    MethodSpec("affnerf", _build("affnerf"), "AFF-NeRF: global shape and appearance codes from the input view(s)")
+)
+register_method(
+    MethodSpec("pixelnerf", _build("pixelnerf"), "PixelNeRF-M: pixel-aligned features at the posed input views")
+)

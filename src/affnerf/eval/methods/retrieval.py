@@ -60,7 +60,8 @@ class RetrievalMethod:
     Args:
         loaded: a trained AFF-NeRF (its shape encoder embeds the images).
         dataset: the dataset holding the training objects and their ``mesh.ply``.
-        categories: restrict the bank to these categories (a list or comma-separated text; None = every training object).
+        categories: restrict the bank to these categories (a list or comma-separated text; None = every training
+            object).
         views_per_object: views of each training object whose codes are averaged into its bank entry.
     """
 
@@ -87,7 +88,9 @@ class RetrievalMethod:
             views = np.linspace(0, len(obj) - 1, self.views_per_object).round().astype(int).tolist()
         model = self.loaded.model
         images, intr, poses = dataset_views(obj, views, model.config.encoder_resolution)
-        codes = model.encode_views(images.to(self.loaded.device), intr.to(self.loaded.device), poses.to(self.loaded.device))
+        codes = model.encode_views(
+            images.to(self.loaded.device), intr.to(self.loaded.device), poses.to(self.loaded.device)
+        )
         return codes.shape[0].cpu().numpy()
 
     def nearest(self, obj: ObjectData, inputs: list[int]) -> IndexEntry:

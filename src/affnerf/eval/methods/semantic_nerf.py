@@ -15,9 +15,8 @@ from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet, resized
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
 from affnerf.model.base import ConditionedNeRF
-from affnerf.model.config import ModelConfig
+from affnerf.model.config import RAYS_PER_CHUNK, ModelConfig
 from affnerf.model.raymarch import Condition, FieldRenderer
-from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import render_view
 from affnerf.train.cache import frames_from_arrays
 from affnerf.train.loss import nerf_loss
@@ -44,8 +43,15 @@ class SemanticNeRFConfig:
     affordance_weight: float = 4e-2
     foreground_fraction: float = 0.5
     model: ModelConfig = field(
-        default_factory=lambda: ModelConfig(field_width=64, field_depth=4, color_width=32, affordance_width=32,
-                                            num_coarse=32, num_fine=32, clip_to_cube=True)  # fmt: skip
+        default_factory=lambda: ModelConfig(
+            field_width=64,
+            field_depth=4,
+            color_width=32,
+            affordance_width=32,
+            num_coarse=32,
+            num_fine=32,
+            clip_to_cube=True,
+        )
     )
     seed: int = 0
 
@@ -73,7 +79,11 @@ class SemanticNeRFMethod:
     """Fits an :class:`ObjectNeRF` on each object's input views (at the scored resolution)."""
 
     def __init__(
-        self, num_classes: int, config: SemanticNeRFConfig = SemanticNeRFConfig(), chunk: int = RAYS_PER_CHUNK, fast: bool = True
+        self,
+        num_classes: int,
+        config: SemanticNeRFConfig = SemanticNeRFConfig(),
+        chunk: int = RAYS_PER_CHUNK,
+        fast: bool = True,
     ) -> None:
         self.num_classes, self.config, self.chunk, self.fast = num_classes, config, chunk, fast
         self.name = "semantic-nerf"
@@ -109,7 +119,9 @@ class SemanticNeRFMethod:
         model = self.fit(obj, inputs, targets)
         with torch.no_grad():
             grid = model.occupancy(None) if self.fast else None
-        views = [render_view(model, None, targets.intrinsics, p, targets.background, self.chunk, grid) for p in targets.poses]
+        views = [
+            render_view(model, None, targets.intrinsics, p, targets.background, self.chunk, grid) for p in targets.poses
+        ]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))
 
 

@@ -129,7 +129,7 @@ def _body(p: BottleParams) -> trimesh.Trimesh:
     to_neck = _smoothstep((z - p.wall_height) / p.shoulder_length)  # 0 on the wall, 1 at the neck
     exponent = 2.0 if p.section == "round" else p.squareness
     rings = []
-    for (r, zi), t in zip(profile, to_neck):
+    for (r, zi), t in zip(profile, to_neck, strict=True):
         e = exponent + (2.0 - exponent) * t
         b = p.aspect + (1.0 - p.aspect) * t
         xy = superellipse(r, r * b, e, _SECTION_POINTS)

@@ -140,7 +140,7 @@ def door_names(p: CabinetParams) -> list[str]:
 
 def joint_values(p: CabinetParams) -> dict[str, float]:
     """The sampled joint states by joint name."""
-    values = dict(zip(door_names(p), p.door_angles))
+    values = dict(zip(door_names(p), p.door_angles, strict=True))
     values.update({f"drawer_{i}": v for i, v in enumerate(p.drawer_openings)})
     return values
 

@@ -211,11 +211,11 @@ def _lid(p: TeapotParams) -> trimesh.Trimesh:
     dome_r = 1.06 * rr - t * (1.06 * rr - 0.45 * k)
     dome_z = h + 0.004 + dome * np.sin(0.5 * np.pi * t) ** 0.7
     points = [(0.9 * rr, h - 0.1 * rr), (0.9 * rr, h), (1.06 * rr, h)]
-    points += list(zip(dome_r, dome_z))
+    points += list(zip(dome_r, dome_z, strict=True))
     zk = dome_z[-1] + 0.5 * k
     if p.knob == "ball":
         a = np.linspace(-0.6 * np.pi, 0.5 * np.pi, 12)
-        points += [(0.45 * k, zk - 0.2 * k)] + list(zip(k * np.cos(a), zk + 0.8 * k + k * np.sin(a)))[1:]
+        points += [(0.45 * k, zk - 0.2 * k)] + list(zip(k * np.cos(a), zk + 0.8 * k + k * np.sin(a), strict=True))[1:]
     else:
         points += [(0.45 * k, zk), (1.2 * k, zk + 0.3 * k), (1.2 * k, zk + 0.6 * k), (0.0, zk + 0.6 * k)]
     return revolve(np.array(points), segments=48)
