@@ -16,15 +16,13 @@ from typing import Any
 
 import torch
 
+from affnerf.bench.training import training_step
 from affnerf.data.dataset import Dataset
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, evaluate
-from affnerf.model.registry import build_model
 from affnerf.predict.loading import load_model
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.config import TrainConfig, config_to_json
-from affnerf.train.loss import nerf_loss
-from affnerf.train.sampler import RaySampler
 from affnerf.train.trainer import train
 
 #: Held-out scoring during curves: one input view, four targets at a quarter of the dataset's resolution.
@@ -32,30 +30,12 @@ CURVE_PROTOCOL = ProtocolConfig(input_views=1, target_views=4, scale=0.25, seed=
 
 
 def step_seconds(config: TrainConfig, frames: list[ObjectFrames], steps: int = 40, warmup: int = 10) -> float:
-    """Median seconds of a training step of ``config`` (forward, backward, optimiser), measured alone."""
-    torch.manual_seed(0)
-    model = build_model(config.model, 12)
-    optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
-    sampler = RaySampler(
-        frames,
-        config.objects_per_step,
-        config.rays_per_step,
-        config.foreground_fraction,
-        0,
-        input_views=config.input_views,
-    )
-    generator = torch.Generator().manual_seed(0)
+    """Median seconds of a training step of ``config`` (sampling, forward, backward, optimiser), measured alone."""
+    step, _ = training_step(config, frames, torch.device("cpu"))
     times = []
     for i in range(warmup + steps):
         start = time.perf_counter()
-        b = sampler.next_batch()
-        coarse, fine = model(
-            b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background, True, generator
-        )
-        loss = nerf_loss(coarse, fine, b.rgb, b.labels, config.affordance_weight).total
-        optimizer.zero_grad()
-        loss.backward()
-        optimizer.step()
+        step()
         if i >= warmup:
             times.append(time.perf_counter() - start)
     return statistics.median(times)

@@ -7,12 +7,14 @@ it. Both run the same architecture on the same batches, side by side.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
 import torch
 
 from affnerf.bench.timing import sync, timed
+from affnerf.model.base import ConditionedNeRF
 from affnerf.model.registry import build_model
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.config import TrainConfig
@@ -20,27 +22,27 @@ from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
 
 
-def step_throughput(
-    config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device
-) -> dict[str, Any]:
-    """Seconds per training step (median of ``steps``), rays/s and field evaluations/s for one configuration."""
+def training_step(
+    config: TrainConfig, frames: list[ObjectFrames], device: torch.device, batches: int = 0
+) -> tuple[Callable[[], None], ConditionedNeRF]:
+    """A closure doing one training step (forward, backward, Adam) of a fresh model of ``config``, and the model.
+
+    With ``batches`` > 0 the steps cycle through that many batches drawn up front (the model's cost alone);
+    with 0 each step draws its own batch (sampling included, as in training).
+    """
     torch.manual_seed(0)
     model = build_model(config.model, 12).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
     sampler = RaySampler(
-        frames,
-        config.objects_per_step,
-        config.rays_per_step,
-        config.foreground_fraction,
-        0,
+        frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, 0,
         input_views=config.input_views,
-    )
-    batches = [sampler.next_batch().to(device) for _ in range(steps + 1)]
+    )  # fmt: skip
+    drawn = [sampler.next_batch().to(device) for _ in range(batches)]
     generator = torch.Generator().manual_seed(0)
     position = [0]
 
     def step() -> None:
-        b = batches[position[0] % len(batches)]
+        b = drawn[position[0] % len(drawn)] if drawn else sampler.next_batch().to(device)
         position[0] += 1
         coarse, fine = model(
             b.images, b.input_intrinsics, b.input_poses, b.ray_object, b.origins, b.dirs, b.background, True, generator
@@ -50,6 +52,14 @@ def step_throughput(
         loss.backward()
         optimizer.step()
 
+    return step, model
+
+
+def step_throughput(
+    config: TrainConfig, frames: list[ObjectFrames], steps: int, device: torch.device
+) -> dict[str, Any]:
+    """Seconds per training step (median of ``steps``), rays/s and field evaluations/s for one configuration."""
+    step, model = training_step(config, frames, device, batches=steps + 1)
     step()
     sync(device)
     model.renderer.points_evaluated = 0
