@@ -38,6 +38,8 @@ def _eval(run, data, out, method, *extra):
             "10",
             "--device",
             "cpu",
+            "--mesh-resolution",
+            "16",
             *extra,
         ]
     )
@@ -56,6 +58,11 @@ def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dat
             assert set(METRIC_KEYS) <= set(cat) and cat["objects"] == 1 and cat["views"] == 3
             assert 0.0 <= cat["mIoU"] <= 1.0 and 0.0 <= cat["PA"] <= 1.0
         assert m["mean"]["objects"] == 2
+        for block in [*m["categories"].values(), m["mean"]]:  # 3D metrics on by default; constant has no mesh
+            if label == "constant":
+                assert block["fscore_1cm"] is None and block["affordance_miou_3d"] is None
+            else:
+                assert 0.0 <= block["fscore_1cm"] <= 1.0 and 0.0 <= block["affordance_miou_3d"] <= 1.0
     assert json.loads((out / "metrics.json").read_text())["method"] == "affnerf"
     table = (out / "table2.md").read_text()
     for label in labels:

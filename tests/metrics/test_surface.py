@@ -62,6 +62,10 @@ def test_a_scaled_sphere_is_off_by_the_radius_difference():
     assert m["chamfer_l1"] == pytest.approx(0.02, rel=0.05)
     assert m["fscore_1cm"] == 0.0
     assert m["affordance_miou_3d"] > 0.97  # same halves, labels transfer radially
+    assert m["chamfer_l1"] == pytest.approx(chamfer_l1(bigger.points, true.points))
+    near = sample_surface(*_sphere(0.105), rng=1)  # 5 mm out: within tau, but not every sample pairs up
+    assert surface_metrics(near, true)["fscore_1cm"] == pytest.approx(fscore(near.points, true.points))
+    assert 0.5 < fscore(near.points, true.points) <= 1.0
 
 
 def test_offset_squares_within_and_beyond_tau():

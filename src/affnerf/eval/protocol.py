@@ -3,7 +3,10 @@
 For each object: input views chosen by a fixed seed, K other views as targets. A method sees the input views
 (images, poses, and for the per-object baselines their labels) and predicts RGB and affordance labels at the
 target cameras. Per category one confusion matrix accumulates all its target views; metrics follow
-:mod:`affnerf.metrics.segmentation`, PSNR is averaged over target views.
+:mod:`affnerf.metrics.segmentation`, PSNR is averaged over target views. With ``metrics_3d`` a method's mesh (if it
+gives one) is scored against the object's true mesh (:mod:`affnerf.eval.surface`); with ``stability_views`` N each
+object is also predicted from N - 1 other input views and the spread of its scores reported
+(:mod:`affnerf.eval.stability`).
 """
 
 from __future__ import annotations
@@ -18,8 +21,19 @@ from PIL import Image
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.data.dataset import ObjectData
+from affnerf.eval.stability import StabilityRecord, input_sets, stability_json
+from affnerf.eval.surface import (
+    SurfaceScore,
+    category_surface,
+    mean_surface,
+    method_mesh,
+    sample_seed,
+    score_mesh,
+    true_samples,
+)
 from affnerf.metrics.image import psnr
-from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
+from affnerf.metrics.segmentation import confusion_matrix, mean_iou, segmentation_metrics
+from affnerf.metrics.surface import SurfaceSamples
 
 METRIC_KEYS = ("mIoU", "PA", "MPA", "mIoU_object", "PA_object", "MPA_object", "PSNR")
 
@@ -33,12 +47,23 @@ class ProtocolConfig:
         target_views: views scored per object (K).
         scale: resolution of the scored views as a fraction of the dataset's images.
         seed: seed of the view choice (the same for every method).
+        metrics_3d: also score each method's mesh against the object's true mesh (methods without meshes get
+            ``null``).
+        stability_views: predict each object from this many input-view sets and report the spread of its scores
+            (0 = off; the extra predictions are not part of the other metrics).
     """
 
     input_views: int = 1
     target_views: int = 20
     scale: float = 1.0
     seed: int = 0
+    metrics_3d: bool = False
+    stability_views: int = 0
+
+
+def view_order(num_frames: int, object_id: str, seed: int) -> list[int]:
+    """The object's frames in the seeded order the protocol takes inputs and targets from."""
+    return np.random.default_rng([seed, zlib.crc32(object_id.encode())]).permutation(num_frames).tolist()
 
 
 def choose_views(num_frames: int, object_id: str, config: ProtocolConfig) -> tuple[list[int], list[int]]:
@@ -49,8 +74,7 @@ def choose_views(num_frames: int, object_id: str, config: ProtocolConfig) -> tup
         >>> len(i), len(t), set(i) & set(t)
         (1, 3, set())
     """
-    rng = np.random.default_rng([config.seed, zlib.crc32(object_id.encode())])
-    order = rng.permutation(num_frames).tolist()
+    order = view_order(num_frames, object_id, config.seed)
     inputs = order[: config.input_views]
     targets = order[config.input_views : config.input_views + config.target_views]
     return sorted(inputs), sorted(targets)
@@ -75,7 +99,11 @@ class Prediction:
 
 
 class Method(Protocol):
-    """Anything that predicts affordance (and maybe colour) at new cameras from some views of an object."""
+    """Anything that predicts affordance (and maybe colour) at new cameras from some views of an object.
+
+    A method may also give meshes: ``mesh(obj, inputs) -> LabelledMesh | None`` (:class:`affnerf.eval.surface.
+    MeshMethod`), scored by the 3D metrics.
+    """
 
     name: str
 
@@ -95,19 +123,27 @@ class CategoryResult:
 
     confusion: np.ndarray
     psnr: list[float] = field(default_factory=list)
+    surface: list[SurfaceScore | None] = field(default_factory=list)
     objects: int = 0
     views: int = 0
 
 
 @dataclass
 class EvalResult:
-    """Per-category accumulations of one method, and the pictures kept for the figure."""
+    """Per-category accumulations of one method, and the pictures kept for the figure.
+
+    ``metrics_3d`` adds the 3D keys to every category (``null`` without meshes); ``stability_views`` > 0 adds the
+    ``stability`` section built from ``stability``.
+    """
 
     method: str
     split: str
     num_classes: int
     categories: dict[str, CategoryResult] = field(default_factory=dict)
     examples: list[dict[str, Any]] = field(default_factory=list)
+    metrics_3d: bool = False
+    stability_views: int = 0
+    stability: list[StabilityRecord] = field(default_factory=list)
 
     def add(self, category: str, gt: np.ndarray, pred: Prediction, gt_rgb: np.ndarray) -> None:
         """Add one object's target views: ground-truth labels (K, H, W) and RGB (K, H, W, 3) uint8."""
@@ -118,21 +154,92 @@ class EvalResult:
         cat.objects += 1
         cat.views += len(gt)
 
+    def add_surface(self, category: str, score: SurfaceScore | None) -> None:
+        """Add one object's 3D scores (None: the method gave no mesh), after :meth:`add` of its views."""
+        self.categories[category].surface.append(score)
+
     def to_json(self) -> dict[str, Any]:
         """The conventions §5 ``metrics.json`` schema: per category, and the mean over categories."""
         cats: dict[str, dict[str, Any]] = {}
         for name, c in sorted(self.categories.items()):
             m: dict[str, Any] = segmentation_metrics(c.confusion)
             m["PSNR"] = float(np.mean(c.psnr)) if c.psnr else None
+            if self.metrics_3d:
+                m.update(category_surface(c.surface))
             m.update(objects=c.objects, views=c.views)
             cats[name] = m
         mean: dict[str, Any] = {}
         for key in METRIC_KEYS:
             values = [m[key] for m in cats.values() if m[key] is not None and np.isfinite(m[key])]
             mean[key] = float(np.mean(values)) if values else None
+        if self.metrics_3d:
+            mean.update(mean_surface(list(cats.values())))
         mean["objects"] = sum(m["objects"] for m in cats.values())
         mean["views"] = sum(m["views"] for m in cats.values())
-        return {"categories": cats, "mean": mean, "method": self.method, "split": self.split}
+        out = {"categories": cats, "mean": mean, "method": self.method, "split": self.split}
+        if self.stability_views:
+            out["stability"] = stability_json(self.stability, self.stability_views)
+        return out
+
+
+def object_targets(obj: ObjectData, targets: list[int], scale: float) -> tuple[TargetSet, np.ndarray, np.ndarray]:
+    """What a method must predict of ``obj`` at the target frames, and the truth there: the target set, labels
+    (K, H, W) uint8 and RGB (K, H, W, 3) uint8 at ``scale`` × the dataset resolution."""
+    intr = obj.record.intrinsics.scaled(scale)
+    size = (intr.width, intr.height)
+    target_set = TargetSet(intr, np.stack([obj.pose(i) for i in targets]), obj.record.background_color)
+    gt = np.stack([resized(obj.affordance(i), size, nearest=True) for i in targets])
+    gt_rgb = np.stack([resized(obj.rgb(i), size, nearest=False) for i in targets])
+    return target_set, gt, gt_rgb
+
+
+def surface_score(
+    method: Method, obj: ObjectData, inputs: list[int], truth: SurfaceSamples | None, seed: int
+) -> SurfaceScore | None:
+    """The 3D scores of the method's mesh from ``inputs``; None without a mesh or without the truth (3D off)."""
+    if truth is None:
+        return None
+    return score_mesh(method_mesh(method, obj, inputs), truth, sample_seed(seed, obj.record.object_id))
+
+
+def stability_record(
+    method: Method,
+    obj: ObjectData,
+    config: ProtocolConfig,
+    targets: TargetSet,
+    gt: np.ndarray,
+    num_classes: int,
+    first: tuple[Prediction, SurfaceScore | None],
+    truth: SurfaceSamples | None,
+) -> StabilityRecord:
+    """Scores of ``obj`` from each of ``config.stability_views`` input-view sets at the same targets: the object's
+    own 2D mIoU (its target views' confusion matrix) and F-score (None without a mesh or with 3D off). ``first``
+    is the prediction and 3D score from the protocol's own inputs, reused."""
+    order = view_order(len(obj), obj.record.object_id, config.seed)
+    sets = input_sets(order, config.input_views, config.target_views, config.stability_views)
+    mious, fscores = [], []
+    for k, inputs in enumerate(sets):
+        if k == 0:
+            pred, score = first
+        else:
+            pred = method.predict(obj, inputs, targets)
+            score = surface_score(method, obj, inputs, truth, config.seed)
+        mious.append(mean_iou(confusion_matrix(gt, pred.labels, num_classes)))
+        fscores.append(None if score is None else score["fscore_1cm"])
+    return StabilityRecord(obj.record.object_id, obj.record.category, sets, mious, fscores)
+
+
+def _example(obj: ObjectData, inputs: list[int], gt: np.ndarray, gt_rgb: np.ndarray, pred: Prediction) -> dict:
+    """One object's first target (input, ground truth, prediction) for the figure."""
+    size = (gt.shape[2], gt.shape[1])
+    return {
+        "object_id": obj.record.object_id,
+        "input": resized(obj.rgb(inputs[0]), size, nearest=False),
+        "gt_rgb": gt_rgb[0],
+        "gt_labels": gt[0],
+        "labels": pred.labels[0],
+        "rgb": None if pred.rgb is None else pred.rgb[0],
+    }
 
 
 def evaluate(
@@ -148,30 +255,26 @@ def evaluate(
     Args:
         method: the method.
         objects: the objects to score.
-        config: view choice and resolution.
+        config: view choice, resolution, 3D metrics and view stability.
         split: name recorded in the result.
         num_classes: affordance classes including background.
         keep_examples: keep this many objects' first target (input, ground truth, prediction) for figures.
     """
-    result = EvalResult(method.name, split, num_classes)
+    result = EvalResult(method.name, split, num_classes, metrics_3d=config.metrics_3d)
+    result.stability_views = config.stability_views
     for obj in objects:
+        category = obj.record.category
         inputs, targets = choose_views(len(obj), obj.record.object_id, config)
-        intr = obj.record.intrinsics.scaled(config.scale)
-        size = (intr.width, intr.height)
-        target_set = TargetSet(intr, np.stack([obj.pose(i) for i in targets]), obj.record.background_color)
+        target_set, gt, gt_rgb = object_targets(obj, targets, config.scale)
         pred = method.predict(obj, inputs, target_set)
-        gt = np.stack([resized(obj.affordance(i), size, nearest=True) for i in targets])
-        gt_rgb = np.stack([resized(obj.rgb(i), size, nearest=False) for i in targets])
-        result.add(obj.record.category, gt, pred, gt_rgb)
+        result.add(category, gt, pred, gt_rgb)
+        truth = true_samples(obj, config.seed) if config.metrics_3d else None
+        score = surface_score(method, obj, inputs, truth, config.seed)
+        if config.metrics_3d:
+            result.add_surface(category, score)
+        if config.stability_views:
+            record = stability_record(method, obj, config, target_set, gt, num_classes, (pred, score), truth)
+            result.stability.append(record)
         if len(result.examples) < keep_examples:
-            result.examples.append(
-                {
-                    "object_id": obj.record.object_id,
-                    "input": resized(obj.rgb(inputs[0]), size, nearest=False),
-                    "gt_rgb": gt_rgb[0],
-                    "gt_labels": gt[0],
-                    "labels": pred.labels[0],
-                    "rgb": None if pred.rgb is None else pred.rgb[0],
-                }
-            )
+            result.examples.append(_example(obj, inputs, gt, gt_rgb, pred))
     return result

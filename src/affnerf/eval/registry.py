@@ -28,6 +28,7 @@ class MethodContext:
         chunk: rays per forward pass.
         fast: render with the objects' occupancy grids (empty-space skipping).
         semantic_steps: optimisation steps of each per-object Semantic-NeRF.
+        mesh_resolution: marching-cubes samples per axis of the meshes methods extract for the 3D metrics.
     """
 
     dataset: Dataset
@@ -36,6 +37,7 @@ class MethodContext:
     chunk: int
     fast: bool
     semantic_steps: int
+    mesh_resolution: int = 128
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,5 @@
-"""Reports of the evaluation: the markdown table laid out like the paper's Table 2, and the figure grid."""
+"""Reports of the evaluation: the markdown table laid out like the paper's Table 2 (with the 3D metrics and view
+stability when measured), and the figure grid."""
 
 from __future__ import annotations
 
@@ -16,6 +17,11 @@ from affnerf.pictures.compose import grid, overlay_affordance, stack_rows, text_
 #: Rows of the main table, in the paper's order.
 MAIN_METRICS = ("mIoU", "PA", "MPA")
 EXTRA_METRICS = ("mIoU_object", "PA_object", "MPA_object", "PSNR")
+#: The 3D metrics (conventions §5) and the view-stability spreads.
+SURFACE_METRICS = ("chamfer_l1", "fscore_1cm", "affordance_miou_3d")
+STABILITY_METRICS = ("mIoU_spread", "fscore_1cm_spread")
+#: Metrics where lower is better (bold marks the smallest).
+LOWER_IS_BETTER = frozenset({"chamfer_l1", "mIoU_spread", "fscore_1cm_spread"})
 
 
 def _fmt(value: Any, best: bool) -> str:
@@ -27,7 +33,7 @@ def _fmt(value: Any, best: bool) -> str:
 
 def metrics_table(results: Sequence[dict[str, Any]], metrics: Sequence[str] = MAIN_METRICS) -> str:
     """A markdown table: one block of rows per metric, one row per method, one column per category and the
-    average (the best value of each column in bold).
+    average (the best value of each column in bold: the smallest for :data:`LOWER_IS_BETTER`).
 
     Args:
         results: ``metrics.json`` contents (conventions §5), one per method.
@@ -40,7 +46,8 @@ def metrics_table(results: Sequence[dict[str, Any]], metrics: Sequence[str] = MA
     for metric in metrics:
         columns = [[r["categories"].get(c, {}).get(metric) for r in results] for c in categories]
         columns.append([r["mean"].get(metric) for r in results])
-        best = [max((v for v in col if v is not None and math.isfinite(v)), default=None) for col in columns]
+        pick = min if metric in LOWER_IS_BETTER else max
+        best = [pick((v for v in col if v is not None and math.isfinite(v)), default=None) for col in columns]
         for i, r in enumerate(results):
             cells = [
                 _fmt(col[i], col[i] is not None and col[i] == b and len(results) > 1)
@@ -66,9 +73,44 @@ def table2_markdown(results: Sequence[dict[str, Any]], context: dict[str, Any] |
         "",
         metrics_table(results, EXTRA_METRICS),
     ]
+    parts += surface_section(results) + stability_section(results)
     if context:
         parts += ["", "Settings:", "", "```", json.dumps(context, indent=1), "```"]
     return "\n".join(parts) + "\n"
+
+
+def surface_section(results: Sequence[dict[str, Any]]) -> list[str]:
+    """Lines of the 3D table, over the methods evaluated with 3D metrics (none when there are none)."""
+    measured = [r for r in results if "fscore_1cm" in r["mean"]]
+    if not measured:
+        return []
+    return [
+        "",
+        "3D (conventions §5): each method's labelled mesh against the true mesh, 20,000 area-weighted surface "
+        "samples each; Chamfer-L1 in metres (lower is better; over non-empty meshes), F-score at 1 cm, 3D "
+        "affordance mIoU (background excluded); – where a method gives no mesh:",
+        "",
+        metrics_table(measured, SURFACE_METRICS),
+    ]
+
+
+def stability_section(results: Sequence[dict[str, Any]]) -> list[str]:
+    """Lines of the view-stability table, over the methods evaluated with it (none when there are none)."""
+    measured = [
+        {"method": r["method"], "categories": r["stability"]["categories"], "mean": r["stability"]["mean"]}
+        for r in results
+        if r.get("stability")
+    ]
+    if not measured:
+        return []
+    views = sorted({r["stability"]["views"] for r in results if r.get("stability")})
+    return [
+        "",
+        f"View stability ({', '.join(map(str, views))} input views per object): the spread (max − min) of each "
+        "object's mIoU and F-score over its input views, averaged (lower is steadier):",
+        "",
+        metrics_table(measured, STABILITY_METRICS),
+    ]
 
 
 def read_method_results(folder: Path) -> list[dict[str, Any]]:

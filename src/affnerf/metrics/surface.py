@@ -115,7 +115,27 @@ def chamfer_l1(pred: np.ndarray, true: np.ndarray) -> float | None:
     """
     if len(pred) == 0 or len(true) == 0:
         return None
-    return float(0.5 * (nearest(pred, true)[0].mean() + nearest(true, pred)[0].mean()))
+    return chamfer_from_distances(nearest(pred, true)[0], nearest(true, pred)[0])
+
+
+def chamfer_from_distances(pred_to_true: np.ndarray, true_to_pred: np.ndarray) -> float:
+    """Chamfer-L1 from the (N,) nearest distances of predicted points and the (M,) ones of true points."""
+    return float(0.5 * (pred_to_true.mean() + true_to_pred.mean()))
+
+
+def fscore_from_distances(pred_to_true: np.ndarray, true_to_pred: np.ndarray, tau: float = FSCORE_TAU) -> float:
+    """F-score at ``tau`` from the (N,) nearest distances of predicted points and the (M,) ones of true points
+    (0 when either is empty).
+
+    Example:
+        >>> fscore_from_distances(np.array([0.0, 1.0]), np.array([0.005]))  # P = 1/2, R = 1
+        0.6666666666666666
+    """
+    if len(pred_to_true) == 0 or len(true_to_pred) == 0:
+        return 0.0
+    precision = float((pred_to_true <= tau).mean())
+    recall = float((true_to_pred <= tau).mean())
+    return 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
 
 
 def fscore(pred: np.ndarray, true: np.ndarray, tau: float = FSCORE_TAU) -> float:
@@ -129,9 +149,7 @@ def fscore(pred: np.ndarray, true: np.ndarray, tau: float = FSCORE_TAU) -> float
     """
     if len(pred) == 0 or len(true) == 0:
         return 0.0
-    precision = float((nearest(pred, true)[0] <= tau).mean())
-    recall = float((nearest(true, pred)[0] <= tau).mean())
-    return 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
+    return fscore_from_distances(nearest(pred, true)[0], nearest(true, pred)[0], tau)
 
 
 def transferred_labels(pred: SurfaceSamples, true_points: np.ndarray) -> np.ndarray:
@@ -167,9 +185,14 @@ def affordance_miou_3d(pred: SurfaceSamples, true: SurfaceSamples, background: i
 
 
 def surface_metrics(pred: SurfaceSamples, true: SurfaceSamples, tau: float = FSCORE_TAU) -> dict[str, float | None]:
-    """The three 3D metrics (keys :data:`SURFACE_KEYS`) of predicted against true surface samples."""
+    """The three 3D metrics (keys :data:`SURFACE_KEYS`) of predicted against true surface samples, from one
+    nearest-point search each way."""
+    if len(pred) == 0 or len(true) == 0:
+        return {"chamfer_l1": None, "fscore_1cm": 0.0, "affordance_miou_3d": affordance_miou_3d(pred, true)}
+    pred_to_true = nearest(pred.points, true.points)[0]
+    true_to_pred, index = nearest(true.points, pred.points)
     return {
-        "chamfer_l1": chamfer_l1(pred.points, true.points),
-        "fscore_1cm": fscore(pred.points, true.points, tau),
-        "affordance_miou_3d": affordance_miou_3d(pred, true),
+        "chamfer_l1": chamfer_from_distances(pred_to_true, true_to_pred),
+        "fscore_1cm": fscore_from_distances(pred_to_true, true_to_pred, tau),
+        "affordance_miou_3d": label_miou(true.labels, pred.labels[index]),
     }

@@ -1,5 +1,5 @@
 """Image-conditioned fields under the protocol (AFF-NeRF, PixelNeRF-M): encode the input views, render the
-target cameras."""
+target cameras, and extract the labelled mesh of the encoding for the 3D metrics."""
 
 from __future__ import annotations
 
@@ -10,11 +10,14 @@ from affnerf.data.dataset import ObjectData
 from affnerf.errors import AffnerfError
 from affnerf.eval.protocol import Prediction, TargetSet
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
+from affnerf.meshio import LabelledMesh
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
 from affnerf.predict.loading import LoadedModel, load_model
+from affnerf.predict.mesh import model_mesh
 from affnerf.predict.predictor import pick_device
+from affnerf.rendering.grid import OccupancyGrid
 
 
 class ConditionedNeRFMethod:
@@ -24,13 +27,20 @@ class ConditionedNeRFMethod:
         loaded: the model.
         chunk: rays per forward pass.
         fast: render with the object's occupancy grid (empty-space skipping).
+        mesh_resolution: marching-cubes samples per axis of :meth:`mesh`.
     """
 
-    def __init__(self, loaded: LoadedModel, chunk: int = RAYS_PER_CHUNK, fast: bool = True) -> None:
+    def __init__(
+        self, loaded: LoadedModel, chunk: int = RAYS_PER_CHUNK, fast: bool = True, mesh_resolution: int = 128
+    ) -> None:
         self.loaded = loaded
         self.chunk = chunk
         self.fast = fast
+        self.mesh_resolution = mesh_resolution
         self.name = loaded.model.config.kind
+        self._key: tuple[str, tuple[int, ...]] | None = None
+        self._encoding: object = None
+        self._grid: OccupancyGrid | None = None
 
     @torch.no_grad()
     def encode(self, obj: ObjectData, inputs: list[int]):
@@ -40,15 +50,37 @@ class ConditionedNeRFMethod:
         images, intr, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
         return model.encode_views(images.to(device), intr.to(device), poses.to(device))
 
+    def encoded(self, obj: ObjectData, inputs: list[int]) -> object:
+        """The encoding of ``obj`` from ``inputs``, kept for the last object and inputs (so :meth:`predict` and
+        :meth:`mesh` of the same inputs encode once)."""
+        key = (obj.record.object_id, tuple(inputs))
+        if self._key != key:
+            self._key, self._encoding, self._grid = key, self.encode(obj, inputs), None
+        return self._encoding
+
+    @torch.no_grad()
+    def occupancy(self, obj: ObjectData, inputs: list[int]) -> OccupancyGrid:
+        """The occupancy grid of the encoding of ``obj`` from ``inputs`` (kept like the encoding)."""
+        encoding = self.encoded(obj, inputs)
+        if self._grid is None:
+            self._grid = self.loaded.model.occupancy(encoding)
+        return self._grid
+
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
-        encoding = self.encode(obj, inputs)
+        encoding = self.encoded(obj, inputs)
         model = self.loaded.model
-        grid = model.occupancy(encoding) if self.fast else None
+        grid = self.occupancy(obj, inputs) if self.fast else None
         views = [
             render_view(model, encoding, targets.intrinsics, pose, targets.background, self.chunk, grid)
             for pose in targets.poses
         ]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))
+
+    def mesh(self, obj: ObjectData, inputs: list[int]) -> LabelledMesh:
+        """The labelled mesh of the encoding (marching cubes at the model's ``surface_density``; no faces when the
+        field never reaches it)."""
+        encoding, grid = self.encoded(obj, inputs), self.occupancy(obj, inputs)
+        return model_mesh(self.loaded.model, encoding, self.mesh_resolution, level=None, occupancy=grid)
 
 
 def load_run(context: MethodContext, kind: str, method: str) -> LoadedModel:
@@ -70,7 +102,9 @@ def load_run(context: MethodContext, kind: str, method: str) -> LoadedModel:
 
 
 def _build(kind: str):
-    return lambda context: ConditionedNeRFMethod(load_run(context, kind, kind), context.chunk, context.fast)
+    return lambda context: ConditionedNeRFMethod(
+        load_run(context, kind, kind), context.chunk, context.fast, context.mesh_resolution
+    )
 
 
 register_method(

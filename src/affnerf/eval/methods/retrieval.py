@@ -1,4 +1,5 @@
-"""Retrieval: the training object whose shape code is nearest renders its ground-truth affordance.
+"""Retrieval: the training object whose shape code is nearest renders its ground-truth affordance (and gives its
+true labelled mesh for the 3D metrics).
 
 A learned method that does not beat this has learned nothing beyond recognising the nearest training shape.
 """
@@ -17,7 +18,7 @@ from affnerf.data.writer import surface_from_record
 from affnerf.errors import input_error
 from affnerf.eval.protocol import Prediction, TargetSet
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
-from affnerf.meshio import read_labelled_ply
+from affnerf.meshio import LabelledMesh, read_labelled_ply
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import LoadedModel
 
@@ -81,6 +82,8 @@ class RetrievalMethod:
         self.entries: list[IndexEntry] = bank_entries(dataset, categories)
         self.bank = np.stack([self._embed(dataset.load_object(e), None) for e in self.entries])
         self._casters: dict[str, FrameCaster] = {}
+        self._meshes: dict[str, LabelledMesh] = {}
+        self._nearest: tuple[tuple[str, tuple[int, ...]], IndexEntry] | None = None
 
     @torch.no_grad()
     def _embed(self, obj: ObjectData, views: list[int] | None) -> np.ndarray:
@@ -94,14 +97,27 @@ class RetrievalMethod:
         return codes.shape[0].cpu().numpy()
 
     def nearest(self, obj: ObjectData, inputs: list[int]) -> IndexEntry:
-        """The training object nearest to the input views' shape code."""
-        code = self._embed(obj, inputs)
-        return self.entries[int(np.argmin(((self.bank - code) ** 2).sum(axis=1)))]
+        """The training object nearest to the input views' shape code (kept for the last object and inputs)."""
+        key = (obj.record.object_id, tuple(inputs))
+        if self._nearest is None or self._nearest[0] != key:
+            code = self._embed(obj, inputs)
+            self._nearest = (key, self.entries[int(np.argmin(((self.bank - code) ** 2).sum(axis=1)))])
+        return self._nearest[1]
+
+    def true_mesh(self, entry: IndexEntry) -> LabelledMesh:
+        """A bank object's ground-truth ``mesh.ply``."""
+        if entry.id not in self._meshes:
+            self._meshes[entry.id] = read_labelled_ply(self.dataset.root / entry.path / "mesh.ply")
+        return self._meshes[entry.id]
+
+    def mesh(self, obj: ObjectData, inputs: list[int]) -> LabelledMesh:
+        """The retrieved training object's true mesh (face property ``affordance``)."""
+        return self.true_mesh(self.nearest(obj, inputs))
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         entry = self.nearest(obj, inputs)
         if entry.id not in self._casters:
-            mesh = read_labelled_ply(self.dataset.root / entry.path / "mesh.ply")
+            mesh = self.true_mesh(entry)
             self._casters[entry.id] = FrameCaster(surface_from_record(mesh), targets.background)
         caster = self._casters[entry.id]
         frames = [caster.cast_frame(targets.intrinsics, pose) for pose in targets.poses]

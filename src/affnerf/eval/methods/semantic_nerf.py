@@ -1,6 +1,7 @@
 """Semantic-NeRF per object: a radiance field with a semantic (affordance) head fitted on the input views of one
 object alone (Zhi et al. 2021), then rendered at the target cameras. With one input view it shows what a
-single image gives without a learned prior; with many views it is a reference for what the views determine.
+single image gives without a learned prior; with many views it is a reference for what the views determine. Its
+mesh for the 3D metrics is extracted from the field last fitted (no refitting).
 """
 
 from __future__ import annotations
@@ -14,10 +15,12 @@ import torch
 from affnerf.data.dataset import ObjectData
 from affnerf.eval.protocol import Prediction, TargetSet, resized
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
+from affnerf.meshio import LabelledMesh
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import RAYS_PER_CHUNK, ModelConfig
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.model.views import render_view
+from affnerf.predict.mesh import model_mesh
 from affnerf.train.cache import frames_from_arrays
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
@@ -76,7 +79,8 @@ class ObjectNeRF(ConditionedNeRF):
 
 
 class SemanticNeRFMethod:
-    """Fits an :class:`ObjectNeRF` on each object's input views (at the scored resolution)."""
+    """Fits an :class:`ObjectNeRF` on each object's input views (at the scored resolution); :meth:`mesh` extracts
+    the last fitted field's mesh at ``mesh_resolution``."""
 
     def __init__(
         self,
@@ -84,9 +88,12 @@ class SemanticNeRFMethod:
         config: SemanticNeRFConfig = SemanticNeRFConfig(),
         chunk: int = RAYS_PER_CHUNK,
         fast: bool = True,
+        mesh_resolution: int = 128,
     ) -> None:
         self.num_classes, self.config, self.chunk, self.fast = num_classes, config, chunk, fast
+        self.mesh_resolution = mesh_resolution
         self.name = "semantic-nerf"
+        self._fitted: tuple[tuple[str, tuple[int, ...]], ObjectNeRF] | None = None
 
     def fit(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> ObjectNeRF:
         """Optimise a field on the input views of ``obj``."""
@@ -117,6 +124,7 @@ class SemanticNeRFMethod:
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         model = self.fit(obj, inputs, targets)
+        self._fitted = ((obj.record.object_id, tuple(inputs)), model)
         with torch.no_grad():
             grid = model.occupancy(None) if self.fast else None
         views = [
@@ -124,10 +132,21 @@ class SemanticNeRFMethod:
         ]
         return Prediction(np.stack([v.labels for v in views]), np.stack([v.rgb for v in views]))
 
+    def mesh(self, obj: ObjectData, inputs: list[int]) -> LabelledMesh | None:
+        """The labelled mesh of the field fitted by the last :meth:`predict` when it was of this object and these
+        inputs (marching cubes at its ``surface_density``); None otherwise (fitting needs the target resolution)."""
+        if self._fitted is None or self._fitted[0] != (obj.record.object_id, tuple(inputs)):
+            return None
+        model = self._fitted[1]
+        with torch.no_grad():
+            grid = model.occupancy(None)
+        return model_mesh(model, None, self.mesh_resolution, level=None, occupancy=grid)
+
 
 def _build(context: MethodContext) -> SemanticNeRFMethod:
     classes = len(context.dataset.affordance_classes)
-    return SemanticNeRFMethod(classes, SemanticNeRFConfig(steps=context.semantic_steps), context.chunk, context.fast)
+    config = SemanticNeRFConfig(steps=context.semantic_steps)
+    return SemanticNeRFMethod(classes, config, context.chunk, context.fast, context.mesh_resolution)
 
 
 register_method(MethodSpec("semantic-nerf", _build, "Semantic-NeRF fitted per object on its input views"))
