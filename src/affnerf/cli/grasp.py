@@ -1,8 +1,10 @@
-"""``affnerf grasp``: plan parallel-jaw grasps on a labelled mesh, or score given grasps."""
+"""``affnerf grasp``: plan parallel-jaw grasps on a labelled mesh, or score given grasps, at the object's metric
+size (conventions §6)."""
 
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import Literal
 
@@ -18,69 +20,106 @@ def plan(
     affordance: str = "none",
     num: int = 64,
     gripper: Literal["parallel"] = "parallel",
+    max_opening: float = 0.08,
+    object_size: float | None = None,
+    category: str | None = None,
     candidates: int = 64,
     refine_steps: int = 40,
     seed: int = 0,
 ) -> None:
     """Plan parallel-jaw grasps on a mesh (PLY; with --affordance, one carrying an integer `affordance` property).
 
-    Antipodal candidate pairs are sampled on the surface (on the wanted affordance only, when given), refined all
-    at once by a gradient-based local search, closed on the mesh, checked for gripper collisions and ranked by the
-    Ferrari-Canny epsilon. Writes OUT/grasps.json, OUT/grasps.glb (mesh and gripper models) and OUT/grasps.png.
+    The mesh is first brought to its metric size: --object-size, else the `scale` of a transforms.json beside it
+    (a dataset mesh), else the typical size of --category, else it is taken as metres. Antipodal candidate pairs
+    are sampled on the surface (on the wanted affordance only, when given), refined all at once by a
+    gradient-based local search, closed on the mesh, checked for gripper collisions and ranked by the
+    Ferrari-Canny epsilon. Writes OUT/grasps.json (poses in the metric object frame, with the size used),
+    OUT/grasps.glb (mesh and gripper models) and OUT/grasps.png. When no grasp is found, says why on stderr.
 
     Args:
         mesh: the mesh (a dataset's mesh.ply or a predicted affordance_model.ply).
         out: output folder.
         affordance: restrict contacts to this affordance (e.g. grasp), or none.
         num: grasps kept, best first.
-        gripper: the gripper model (parallel jaw: 0.08 m opening, 0.02 m pads).
+        gripper: the gripper model (parallel jaw: 0.02 m pads).
+        max_opening: the gripper's widest opening, metres.
+        object_size: the object's largest side in metres (overrides transforms.json and --category).
+        category: the object's category, for its typical size (conventions §6) when no size is known.
         candidates: antipodal pairs sampled (each tried with four approach directions).
         refine_steps: local-search steps (0 = none).
         seed: random seed.
     """
     from dataclasses import replace
 
+    from affnerf.grasp.explain import explain_no_grasps, no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import export_scene, render_grasps, save_png, summary, write_grasps
     from affnerf.grasp.planner import PlanConfig, plan_grasps
+    from affnerf.grasp.size import extent, resolve_size, scaled
     from affnerf.grasp.target import load_grasp_object
 
-    obj = load_grasp_object(mesh, need_affordance=affordance != "none")
+    canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
+    size = resolve_size(mesh, canonical.vertices, object_size, category)
+    obj = scaled(canonical, size.factor)
     config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
     config = replace(config, refine=replace(config.refine, steps=refine_steps))
-    hand = ParallelJawGripper()
+    hand = ParallelJawGripper(max_opening=max_opening)
     grasps = plan_grasps(obj, config, hand)
+    why = None if grasps else explain_no_grasps(obj, config, hand, size.source)
     out.mkdir(parents=True, exist_ok=True)
-    write_grasps(out / "grasps.json", grasps, str(mesh), affordance, hand)
+    size_json = size.to_json(extent(canonical.vertices))
+    write_grasps(out / "grasps.json", grasps, str(mesh), affordance, hand, size_json, why)
     export_scene(out / "grasps.glb", obj, grasps, hand)
     save_png(out / "grasps.png", render_grasps(obj, grasps, hand))
+    print(f"size: largest side {extent(obj.vertices):.3f} m ({size.source}); poses in metres", file=sys.stderr)
+    if why is not None:
+        print(no_grasp_text(why), file=sys.stderr)
     print(json.dumps(summary(grasps)))
     print(f"-> {out / 'grasps.json'}")
 
 
 @app.command(name="score")
-def score(mesh: Path, grasps: Path, out: Path | None = None) -> None:
-    """Score grasps on a mesh: close the jaws on it, then the Ferrari-Canny epsilon and the affordance at each
-    contact.
+def score(
+    mesh: Path,
+    grasps: Path,
+    out: Path | None = None,
+    object_size: float | None = None,
+    category: str | None = None,
+) -> None:
+    """Score grasps on a mesh at its metric size: close the jaws on it, then the Ferrari-Canny epsilon and the
+    affordance at each contact.
+
+    The mesh's size is found as in `affnerf grasp plan`, falling back to the grasps file's `size.scale`. The
+    grasps are read in their file's metric frame and moved to the scored mesh's.
 
     Args:
         mesh: the mesh to score on (e.g. the ground-truth mesh.ply).
         grasps: a grasps.json file.
         out: also write the scores as JSON here.
+        object_size: the object's largest side in metres.
+        category: the object's category, for its typical size when no size is known.
     """
     import numpy as np
 
     from affnerf.fileio import write_json_atomic
-    from affnerf.grasp.io import read_grasps
+    from affnerf.grasp.io import read_grasp_scale, read_grasps
     from affnerf.grasp.scoring import score_grasps
+    from affnerf.grasp.size import ObjectSize, rescale_poses, resolve_size, scaled
     from affnerf.grasp.target import load_grasp_object
 
-    obj = load_grasp_object(mesh)
+    canonical = load_grasp_object(mesh)
+    file_scale = read_grasp_scale(grasps)
+    size = resolve_size(mesh, canonical.vertices, object_size, category)
+    if size.source == "mesh as given" and file_scale is not None:
+        size = ObjectSize(1.0 / file_scale, "grasps.json scale")
     poses = np.array([p for p, _ in read_grasps(grasps)]).reshape(-1, 4, 4)
-    scores = score_grasps(obj, poses)
+    poses = rescale_poses(poses, (file_scale or 1.0) * size.factor)  # file frame -> canonical -> this metric
+    scores = score_grasps(scaled(canonical, size.factor), poses)
+    print(f"size: scale {size.scale:.4g} ({size.source})")
     print(f"{'#':>3} {'epsilon':>9} {'width':>7}  affordance at contacts")
     for i, s in enumerate(scores):
         print(f"{i:>3} {s.epsilon:>9.5f} {s.width:>7.4f}  {' / '.join(s.affordance)}")
     if out is not None:
-        write_json_atomic(out, {"mesh": str(mesh), "grasps": str(grasps), "scores": [s.to_json() for s in scores]})
+        result = {"mesh": str(mesh), "grasps": str(grasps), "scale": size.scale, "size_source": size.source}
+        write_json_atomic(out, {**result, "scores": [s.to_json() for s in scores]})
         print(f"-> {out}")

@@ -19,23 +19,47 @@ from affnerf.grasp.target import GraspObject
 from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
 from affnerf.vocab import colorize_labels
 
-FORMAT = "affnerf-grasps-1"
+FORMAT = "affnerf-grasps-2"
 #: Gripper colours in pictures: the best grasp green, the others from yellow to red by rank.
 _BEST, _OTHER = (0.1, 0.75, 0.2), (0.95, 0.6, 0.1)
 
 
-def write_grasps(path: Path, grasps: list[Grasp], mesh: str, affordance: str, gripper: ParallelJawGripper) -> None:
-    """Write ``grasps.json``."""
+def write_grasps(
+    path: Path,
+    grasps: list[Grasp],
+    mesh: str,
+    affordance: str,
+    gripper: ParallelJawGripper,
+    size: dict[str, Any] | None = None,
+    no_grasp: dict[str, Any] | None = None,
+) -> None:
+    """Write ``grasps.json`` (conventions §6): poses in the metric object frame (canonical × 1 / ``size["scale"]``),
+    ``size`` as :meth:`affnerf.grasp.size.ObjectSize.to_json`, and why there is no grasp when there is none."""
     write_json_atomic(
         path,
         {
             "format": FORMAT,
             "mesh": mesh,
             "affordance": affordance,
+            "frame": "metric",
+            "size": size or {"scale": 1.0, "largest_side": None, "source": "mesh as given"},
             "gripper": {"type": "parallel", **gripper.__dict__},
             "grasps": [g.to_json() for g in grasps],
+            "no_grasp": no_grasp,
         },
     )
+
+
+def read_grasp_scale(path: Path) -> float | None:
+    """``size.scale`` of a grasps file (canonical = pose frame × scale), None when it has none (older files,
+    whose poses are in the coordinates of the mesh they were planned on)."""
+    data = read_json_file(Path(path))
+    scale = data.get("size", {}).get("scale") if isinstance(data, dict) and isinstance(data.get("size"), dict) else None
+    if scale is None:
+        return None
+    if not isinstance(scale, (int, float)) or not np.isfinite(scale) or scale <= 0:
+        raise input_error(path, f"size.scale must be a positive number, got {scale!r}")
+    return float(scale)
 
 
 def read_grasps(path: Path) -> list[tuple[np.ndarray, float]]:
