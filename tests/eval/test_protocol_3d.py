@@ -1,0 +1,83 @@
+"""The protocol's 3D scoring on the tiny dataset with methods built here: one that gives each object's own true mesh
+(an oracle: the 3D metrics must be near perfect, which checks frames and labels end to end) and one whose field
+never reaches a surface (an empty mesh); and the 3D and stability tables of the report."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.raycast import FrameCaster
+from affnerf.data.writer import surface_from_record
+from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate
+from affnerf.eval.report import table2_markdown
+from affnerf.meshio import LabelledMesh, read_labelled_ply
+from affnerf.metrics.surface import SURFACE_KEYS
+
+
+class TrueMeshMethod:
+    """Ray-casts each object's own ``mesh.ply`` at the targets and gives that mesh."""
+
+    name = "oracle"
+
+    def mesh(self, obj: ObjectData, inputs: list[int]) -> LabelledMesh:
+        return read_labelled_ply(obj.folder / "mesh.ply")
+
+    def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
+        caster = FrameCaster(surface_from_record(self.mesh(obj, inputs)), targets.background)
+        frames = [caster.cast_frame(targets.intrinsics, pose) for pose in targets.poses]
+        return Prediction(np.stack([f.affordance for f in frames]), np.stack([f.rgb / 255.0 for f in frames]))
+
+
+class NoSurfaceMethod:
+    """Background everywhere, and a mesh without faces (a field that never reaches its surface density)."""
+
+    name = "no-surface"
+
+    def mesh(self, obj: ObjectData, inputs: list[int]) -> LabelledMesh:
+        return LabelledMesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), face_props={"affordance": np.zeros(0)})
+
+    def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
+        k = targets.intrinsics
+        return Prediction(np.zeros((len(targets.poses), k.height, k.width), np.uint8))
+
+
+@pytest.fixture(scope="module")
+def objects(train_dataset) -> tuple[list[ObjectData], int]:
+    ds = Dataset.open(train_dataset)
+    return [ds.load_object(e) for e in ds.objects("test")], len(ds.affordance_classes)
+
+
+PROTOCOL = ProtocolConfig(target_views=2, scale=0.25, metrics_3d=True)
+
+
+def test_the_true_mesh_scores_near_perfectly(objects):
+    result = evaluate(TrueMeshMethod(), objects[0], PROTOCOL, "test", objects[1]).to_json()
+    for block in [*result["categories"].values(), result["mean"]]:
+        assert block["chamfer_l1"] < 0.002 and block["fscore_1cm"] > 0.99
+        # independent samples: points near a part boundary may take the neighbour's label (thin parts lose most)
+        assert block["affordance_miou_3d"] > 0.9 and block["meshes_empty"] == 0
+
+
+def test_an_empty_mesh_scores_zero_without_a_chamfer_distance(objects):
+    result = evaluate(NoSurfaceMethod(), objects[0], PROTOCOL, "test", objects[1]).to_json()
+    for block in [*result["categories"].values(), result["mean"]]:
+        assert block["fscore_1cm"] == 0.0 and block["affordance_miou_3d"] == 0.0
+        assert block["chamfer_l1"] is None
+    assert result["mean"]["meshes_empty"] == 2
+
+
+def test_stability_of_the_oracle_is_zero_and_the_tables_mark_the_lowest_chamfer(objects):
+    config = ProtocolConfig(target_views=2, scale=0.25, metrics_3d=True, stability_views=3)
+    oracle = evaluate(TrueMeshMethod(), objects[0], config, "test", objects[1]).to_json()
+    empty = evaluate(NoSurfaceMethod(), objects[0], config, "test", objects[1]).to_json()
+    assert oracle["stability"]["mean"] == {"mIoU_spread": 0.0, "fscore_1cm_spread": 0.0, "objects": 2}
+    assert empty["stability"]["mean"]["fscore_1cm_spread"] == 0.0
+    table = table2_markdown([oracle, empty])
+    chamfer = next(line for line in table.splitlines() if line.startswith("| chamfer_l1 | oracle |"))
+    assert chamfer.count("**") == 2 * 3  # lowest in both categories and the average
+    assert "| mIoU_spread | oracle | **0.000** |" in table
+    two_d = evaluate(TrueMeshMethod(), objects[0], ProtocolConfig(target_views=2, scale=0.25), "test", objects[1])
+    assert not set(SURFACE_KEYS) & set(two_d.to_json()["mean"]) and "stability" not in two_d.to_json()
+    assert "3D (conventions" not in table2_markdown([two_d.to_json()])
