@@ -111,3 +111,24 @@ def test_every_config_kind_has_a_registered_model():
         assert type(build_model(replace(SMALL, kind=kind), 5)) is MODEL_KINDS[kind]
     with pytest.raises(ValueError, match="unknown model kind 'nerfacto'"):
         build_model(replace(SMALL, kind="nerfacto"), 5)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("kind", ["affnerf", "pixelnerf"])
+def test_point_geometry_of_several_objects_matches_each_objects_own_field(kind):
+    from affnerf.model.registry import build_model
+
+    torch.manual_seed(0)
+    model = build_model(replace(SMALL, kind=kind), 5).eval()
+    poses = torch.eye(4).repeat(2, 1, 1, 1)
+    poses[..., 2, 3] = 0.7
+    encoding = model.encode_views(torch.rand(2, 1, 3, 32, 32), torch.tensor([[[40.0, 40.0, 16.0, 16.0]]] * 2), poses)
+    points = torch.rand(12, 3) * 0.4 - 0.2
+    which = torch.tensor([0, 1] * 6)
+    fields = model.point_geometry(encoding, which, points)
+    assert len(fields) == 2 and fields[0][0].shape == (12,) and fields[1][1].shape == (12, 4)
+    for index in (0, 1):
+        density, labels = model.point_fields(encoding, index)
+        mine = which == index
+        torch.testing.assert_close(fields[-1][0][mine], density(points[mine]))
+        assert torch.equal(fields[-1][1][mine].argmax(-1) + 1, labels(points[mine]))
+    assert not torch.allclose(fields[0][0], fields[1][0])  # the coarse field, then the fine one

@@ -102,6 +102,24 @@ class ConditionedNeRF(nn.Module, ABC):
         encoding = self.encode_views(images, intrinsics, poses)
         return self.render_rays(encoding, ray_object, origins, dirs, background, perturb, generator)
 
+    def point_geometry(
+        self, encoding: Any, point_object: torch.Tensor, points: torch.Tensor
+    ) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """Density and affordance logits of every field at points of several encoded objects (3D supervision).
+
+        Args:
+            encoding: what :meth:`encode_views` returned for B objects.
+            point_object: (P,) index of each point's object in ``encoding``.
+            points: (P, 3) canonical positions.
+
+        Returns:
+            One (P,) density and (P, C - 1) logits pair per field: the coarse one, then the fine one if any.
+        """
+        rays = torch.arange(len(points), device=points.device)
+        trunk_in = self.condition(encoding, point_object)(points, rays)[0]
+        fields = [self.coarse] if self.fine is None else [self.coarse, self.fine]
+        return [f.geometry(points, trunk_in) for f in fields]
+
     def point_fields(self, encoding: Any, index: int = 0) -> tuple[Any, Any]:
         """Density and affordance-class callables of object ``index`` at arbitrary (N, 3) points (the fine field
         when there is one), for mesh extraction."""

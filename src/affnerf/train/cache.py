@@ -3,8 +3,11 @@
 For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W) affordance ids, ``crops.npy``
 (N, S, S, 3) encoder crops, the object's pixels of every frame (``fg_pixels.npy``, flat indices, frame i's
 between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the
-source ``transforms.json``, so a regenerated object is decoded again). Folders are written under a temporary name and
-renamed, so a crash never leaves a half cache that looks complete.
+source ``transforms.json``, so a regenerated object is decoded again). With 3D supervision on, a folder
+``<id>.points`` beside it holds the object's :class:`~affnerf.train.points.PointSet` (``points.npy`` (N, 3) float32,
+``occupancy.npy`` (N,) uint8, ``point_labels.npy`` (N,) uint8) and a ``meta.json`` whose signature hashes the
+source ``mesh.ply`` and the sampling settings. Folders are written under a temporary name and renamed, so a crash
+never leaves a half cache that looks complete.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ import json
 import os
 import shutil
 import uuid
+import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,6 +27,9 @@ from PIL import Image
 
 from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
 from affnerf.data.dataset import ObjectData
+from affnerf.errors import input_error
+from affnerf.meshio import read_labelled_ply
+from affnerf.train.points import POINT_SET_SIZE, PointSet, make_point_set
 
 
 @dataclass
@@ -107,48 +115,57 @@ def _resize(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarr
     return np.asarray(Image.fromarray(image).resize(size, Image.NEAREST if nearest else Image.BOX))
 
 
-def build_frames(obj: ObjectData, folder: Path, scale: float, crop_size: int) -> None:
-    """Decode an object's frames into a cache folder (see the module docstring)."""
-    intr = obj.record.intrinsics.scaled(scale)
-    size = (intr.width, intr.height)
-    n = len(obj)
+def write_folder(folder: Path, fill: Callable[[Path], None]) -> None:
+    """Make ``folder`` atomically: ``fill`` writes into a temporary sibling, which then replaces ``folder``."""
     tmp = folder.parent / f".{folder.name}.{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True)
     try:
-        rgb = np.lib.format.open_memmap(tmp / "rgb.npy", "w+", np.uint8, (n, size[1], size[0], 3))
-        labels = np.lib.format.open_memmap(tmp / "labels.npy", "w+", np.uint8, (n, size[1], size[0]))
-        crops = np.lib.format.open_memmap(tmp / "crops.npy", "w+", np.uint8, (n, crop_size, crop_size, 3))
-        background = obj.record.background_color
-        full = obj.record.intrinsics
-        crop_k = []
-        for i in range(n):
-            full_rgb, full_aff = obj.rgb(i), obj.affordance(i)
-            crops[i] = crop_object(full_rgb, full_aff > 0, crop_size, background)
-            window = crop_window(full_aff > 0)
-            crop_k.append(crop_intrinsics(full.fl_x, full.fl_y, full.cx, full.cy, window, crop_size))
-            rgb[i] = _resize(full_rgb, size, nearest=False)
-            labels[i] = _resize(full_aff, size, nearest=True)
-        for array in (rgb, labels, crops):
-            array.flush()
-        offsets, pixels = foreground_index(labels)
-        np.save(tmp / "fg_offsets.npy", offsets)
-        np.save(tmp / "fg_pixels.npy", pixels)
-        del rgb, labels, crops
-        meta = {
-            "signature": _signature(obj, scale, crop_size),
-            "object_id": obj.record.object_id,
-            "poses": obj.poses.tolist(),
-            "intrinsics": [intr.fl_x, intr.fl_y, intr.cx, intr.cy],
-            "crop_intrinsics": crop_k,
-            "background": list(background),
-        }
-        (tmp / "meta.json").write_text(json.dumps(meta))
+        fill(tmp)
         if folder.exists():
             shutil.rmtree(folder)
         os.rename(tmp, folder)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def build_frames(obj: ObjectData, folder: Path, scale: float, crop_size: int) -> None:
+    """Decode an object's frames into a cache folder (see the module docstring)."""
+    write_folder(folder, lambda tmp: _write_frames(obj, tmp, scale, crop_size))
+
+
+def _write_frames(obj: ObjectData, tmp: Path, scale: float, crop_size: int) -> None:
+    intr = obj.record.intrinsics.scaled(scale)
+    size = (intr.width, intr.height)
+    n = len(obj)
+    rgb = np.lib.format.open_memmap(tmp / "rgb.npy", "w+", np.uint8, (n, size[1], size[0], 3))
+    labels = np.lib.format.open_memmap(tmp / "labels.npy", "w+", np.uint8, (n, size[1], size[0]))
+    crops = np.lib.format.open_memmap(tmp / "crops.npy", "w+", np.uint8, (n, crop_size, crop_size, 3))
+    background = obj.record.background_color
+    full = obj.record.intrinsics
+    crop_k = []
+    for i in range(n):
+        full_rgb, full_aff = obj.rgb(i), obj.affordance(i)
+        crops[i] = crop_object(full_rgb, full_aff > 0, crop_size, background)
+        window = crop_window(full_aff > 0)
+        crop_k.append(crop_intrinsics(full.fl_x, full.fl_y, full.cx, full.cy, window, crop_size))
+        rgb[i] = _resize(full_rgb, size, nearest=False)
+        labels[i] = _resize(full_aff, size, nearest=True)
+    for array in (rgb, labels, crops):
+        array.flush()
+    offsets, pixels = foreground_index(labels)
+    np.save(tmp / "fg_offsets.npy", offsets)
+    np.save(tmp / "fg_pixels.npy", pixels)
+    del rgb, labels, crops
+    meta = {
+        "signature": _signature(obj, scale, crop_size),
+        "object_id": obj.record.object_id,
+        "poses": obj.poses.tolist(),
+        "intrinsics": [intr.fl_x, intr.fl_y, intr.cx, intr.cy],
+        "crop_intrinsics": crop_k,
+        "background": list(background),
+    }
+    (tmp / "meta.json").write_text(json.dumps(meta))
 
 
 def load_frames(folder: Path) -> ObjectFrames:
@@ -176,3 +193,56 @@ def cached_frames(obj: ObjectData, cache_dir: Path, scale: float, crop_size: int
     if not fresh:
         build_frames(obj, folder, scale, crop_size)
     return load_frames(folder)
+
+
+#: Bumped when point sets are made differently, so older ones are rebuilt.
+POINTS_VERSION = 1
+
+
+def _points_signature(mesh_path: Path, half_extent: float, sigmas: tuple[float, ...], total: int) -> str:
+    digest = hashlib.sha1(Path(mesh_path).read_bytes()).hexdigest()[:16]
+    return f"p{POINTS_VERSION}-{digest}-{half_extent:g}-{','.join(f'{s:g}' for s in sigmas)}-{total}"
+
+
+def _write_points(tmp: Path, mesh_path: Path, seed: int, half_extent: float, sigmas: tuple, total: int) -> None:
+    mesh = read_labelled_ply(mesh_path)
+    if "affordance" not in mesh.face_props:
+        raise input_error(mesh_path, "mesh has no per-face 'affordance' property (needed by --points-weight)")
+    points = make_point_set(mesh, half_extent, sigmas, seed, total)
+    np.save(tmp / "points.npy", points.points)
+    np.save(tmp / "occupancy.npy", points.occupancy)
+    np.save(tmp / "point_labels.npy", points.labels)
+    signature = _points_signature(mesh_path, half_extent, sigmas, total)
+    (tmp / "meta.json").write_text(json.dumps({"signature": signature, "seed": seed}))
+
+
+def load_points(folder: Path) -> PointSet:
+    """Open a point folder written by :func:`cached_points` (memory-mapped, read-only)."""
+    names = ("points.npy", "occupancy.npy", "point_labels.npy")
+    return PointSet(*(np.load(folder / name, mmap_mode="r") for name in names))
+
+
+def cached_points(
+    mesh_path: Path,
+    object_id: str,
+    cache_dir: Path,
+    half_extent: float,
+    sigmas: tuple[float, ...],
+    total: int = POINT_SET_SIZE,
+) -> PointSet:
+    """The object's supervision points (``<cache_dir>/<object_id>.points``), made from ``mesh_path`` first if
+    they are missing or stale (another mesh, cube or sigmas); the draws are seeded by the object id alone.
+
+    Args:
+        mesh_path: the object's ``mesh.ply``; object_id: its dataset id; cache_dir: the frame cache's folder;
+        half_extent: half the scene cube's side (m); sigmas: near-surface noise sigmas (m); total: N.
+    """
+    if not Path(mesh_path).is_file():
+        raise input_error(mesh_path, "file not found (--points-weight needs each training object's mesh.ply)")
+    folder = Path(cache_dir) / f"{object_id}.points"
+    meta = folder / "meta.json"
+    signature = _points_signature(mesh_path, half_extent, sigmas, total)
+    if not (meta.is_file() and json.loads(meta.read_text()).get("signature") == signature):
+        seed = zlib.crc32(object_id.encode())
+        write_folder(folder, lambda tmp: _write_points(tmp, mesh_path, seed, half_extent, sigmas, total))
+    return load_points(folder)

@@ -50,6 +50,13 @@ class TrainConfig:
         rays_per_step: rays per step and per process.
         foreground_fraction: share of rays drawn on the object (the rest uniform over the image).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
+        points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
+            paper's loss; conventions §4): occupancy BCE of both fields at ``points_per_object`` points per object,
+            plus ``point_affordance_weight`` times their affordance cross-entropy.
+        points_per_object: supervision points drawn per object and step from its cached point set.
+        point_affordance_weight: weight of the points' affordance cross-entropy relative to their occupancy BCE.
+        point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set.
+        point_sigma_far: noise sigma (m) of the second half (a quarter of each set is uniform over the cube).
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints.
@@ -81,6 +88,11 @@ class TrainConfig:
     rays_per_step: int = 1024
     foreground_fraction: float = 0.5
     affordance_weight: float = 4e-4
+    points_weight: float = 0.0
+    points_per_object: int = 1024
+    point_affordance_weight: float = 1.0
+    point_sigma_near: float = 0.005
+    point_sigma_far: float = 0.02
     image_scale: float = 1.0
     categories: str = ""
     checkpoint_every: int = 2000

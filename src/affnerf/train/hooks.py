@@ -23,7 +23,8 @@ from affnerf.train.logger import MetricsLogger
 from affnerf.train.validate import validate
 
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
-#: ``train/affordance_accuracy``) and the learning rate it used (``train/lr``, a float).
+#: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``) and the
+#: learning rate it used (``train/lr``, a float).
 IterationOutputs = dict[str, torch.Tensor | float]
 
 
@@ -53,8 +54,9 @@ def due(step: int, every: int, last: int) -> bool:
 
 
 class LogScalars:
-    """Every ``log_every`` steps and at the run's last step: losses averaged over ranks, training PSNR and
-    affordance accuracy, learning rate, rays per second since the last log and wall time.
+    """Every ``log_every`` steps and at the run's last step: losses averaged over ranks (with the 3D supervision's
+    terms when the iteration reports them), training PSNR and affordance accuracy, learning rate, rays per second
+    since the last log and wall time.
 
     They go to the logger, the progress bar's postfix, and replace the run's scalars. Every rank must run it
     (the average is a collective).
@@ -62,6 +64,8 @@ class LogScalars:
 
     #: The outputs averaged over ranks, in this order.
     AVERAGED = ("loss/total", "loss/mse", "loss/affordance_ce", "train/affordance_accuracy")
+    #: Outputs averaged and logged when an iteration reports them (3D supervision on).
+    OPTIONAL = ("loss/occupancy", "loss/point_affordance")
 
     def __init__(
         self, config: TrainConfig, ctx: dist_utils.Context, logger: MetricsLogger, bar: tqdm, started: float
@@ -77,15 +81,18 @@ class LogScalars:
         self.window_rays += self.rays_per_step
         if not due(step, self.every, self.last):
             return
-        stats = torch.stack([torch.as_tensor(outputs[key]) for key in self.AVERAGED])  # (4,)
-        loss, mse, ce, acc = dist_utils.mean_across(self.ctx, stats.detach()).tolist()
+        keys = self.AVERAGED + tuple(key for key in self.OPTIONAL if key in outputs)
+        stats = torch.stack([torch.as_tensor(outputs[key]) for key in keys])  # (4,) or (6,)
+        means = dict(zip(keys, dist_utils.mean_across(self.ctx, stats.detach()).tolist(), strict=True))
+        loss, mse = means["loss/total"], means["loss/mse"]
         elapsed = time.perf_counter() - self.window_start
         values = {
             "loss/total": loss,
             "loss/mse": mse,
-            "loss/affordance_ce": ce,
+            "loss/affordance_ce": means["loss/affordance_ce"],
+            **{key: means[key] for key in self.OPTIONAL if key in means},
             "train/psnr": -10.0 * math.log10(max(mse, 1e-10)),
-            "train/affordance_accuracy": acc,
+            "train/affordance_accuracy": means["train/affordance_accuracy"],
             "train/lr": float(outputs["train/lr"]),
             "perf/rays_per_second": self.window_rays / max(elapsed, 1e-9),
             "time/seconds": time.perf_counter() - self.started,

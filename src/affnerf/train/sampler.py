@@ -4,7 +4,8 @@ several distinct views are encoded and the rays come from the rest).
 
 Each rank of a distributed run walks its own slice of a per-epoch shuffle of the training objects, so ranks draw
 different objects; the walk and the random draws are plain state (epoch, position, generator state), saved in
-checkpoints so a resumed run continues with exactly the same data.
+checkpoints so a resumed run continues with exactly the same data. With 3D supervision on, a
+:class:`PointSampler` draws each step's points for the same objects from their cached point sets.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import torch
 
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames
+from affnerf.train.points import PointSet
 
 
 @dataclass
@@ -211,3 +213,60 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         ray_view=torch.from_numpy(np.concatenate(views)).long(),
         object_ids=ids,
     )
+
+
+@dataclass
+class PointBatch:
+    """One step's 3D supervision points (K per object of the step's ray batch).
+
+    Attributes:
+        points: (P, 3) canonical positions; point_object: (P,) index of each point's object in the ray batch;
+        occupancy: (P,) float 0/1 targets; labels: (P,) affordance ids (0 = no target).
+    """
+
+    points: torch.Tensor
+    point_object: torch.Tensor
+    occupancy: torch.Tensor
+    labels: torch.Tensor
+
+    def to(self, device: torch.device | str) -> PointBatch:
+        """The batch on ``device``."""
+        return PointBatch(*(t.to(device) for t in (self.points, self.point_object, self.occupancy, self.labels)))
+
+
+class PointSampler:
+    """Draws ``per_object`` points (uniformly, with replacement) from each object's point set.
+
+    Its generator is its own (seeded by the run's seed and rank), so turning points on leaves the ray batches
+    unchanged; its state goes into checkpoints like the ray sampler's.
+
+    Args:
+        point_sets: object id -> its :class:`~affnerf.train.points.PointSet`.
+        per_object: K, points per object and step.
+        seed, rank: the run's seed and this process's rank.
+    """
+
+    def __init__(self, point_sets: dict[str, PointSet], per_object: int, seed: int, rank: int = 0) -> None:
+        self.point_sets, self.per_object = point_sets, per_object
+        self.rng = np.random.default_rng([seed, rank, 41])
+
+    def draw(self, object_ids: list[str]) -> PointBatch:
+        """K points of each of the ray batch's objects, in its order."""
+        parts = []
+        for slot, object_id in enumerate(object_ids):
+            pts = self.point_sets[object_id]
+            index = np.sort(self.rng.integers(0, len(pts), self.per_object))  # sorted: memory-map friendly
+            parts.append((pts.points[index], np.full(len(index), slot), pts.occupancy[index], pts.labels[index]))
+        xyz, obj, occ, labels = (np.concatenate(p) for p in zip(*parts, strict=True))
+        return PointBatch(
+            torch.from_numpy(xyz).float(),
+            torch.from_numpy(obj).long(),
+            torch.from_numpy(occ).float(),
+            torch.from_numpy(labels).long(),
+        )
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"rng": self.rng.bit_generator.state}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.rng.bit_generator.state = state["rng"]

@@ -21,7 +21,7 @@ from affnerf.model.base import ConditionedNeRF
 from affnerf.train import distributed as dist_utils
 from affnerf.train.checkpoint import check_compatible, list_checkpoints, load_checkpoint, save_checkpoint
 from affnerf.train.config import TrainConfig, config_to_json
-from affnerf.train.sampler import RaySampler
+from affnerf.train.sampler import PointSampler, RaySampler
 
 log = logging.getLogger(__name__)
 
@@ -57,20 +57,26 @@ class TrainingState:
         optimizer: its optimiser.
         sampler: this rank's ray sampler (object order, position, random draws).
         generator: this rank's generator of the forward pass's sample perturbations.
+        points: this rank's sampler of 3D supervision points (None when ``points_weight`` is 0).
     """
 
     model: ConditionedNeRF
     optimizer: torch.optim.Optimizer
     sampler: RaySampler
     generator: torch.Generator
+    points: PointSampler | None = None
 
     def rank_state(self) -> dict[str, Any]:
-        """This rank's data order and random state: sampler, forward-pass generator and torch's global RNG."""
-        return {
+        """This rank's data order and random state: sampler, forward-pass generator and torch's global RNG (and the
+        point sampler's, when there is one)."""
+        state = {
             "sampler": self.sampler.state_dict(),
             "generator": self.generator.get_state(),
             "torch": torch.get_rng_state(),
         }
+        if self.points is not None:
+            state["points"] = self.points.state_dict()
+        return state
 
     def save(self, config: TrainConfig, ctx: dist_utils.Context, step: int, classes: list[str]) -> None:
         """Write ``checkpoints/step_<step>.pt`` from rank 0 with every rank's state; all ranks must call it."""
@@ -105,6 +111,8 @@ class TrainingState:
             self.sampler.load_state_dict(state["sampler"])
             self.generator.set_state(state["generator"])
             torch.set_rng_state(state["torch"])
+            if self.points is not None and "points" in state:
+                self.points.load_state_dict(state["points"])
         else:
             log.warning(
                 "%s: saved by %d processes, resumed by %d; data order and random state restart from the seed",

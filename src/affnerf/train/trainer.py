@@ -22,16 +22,20 @@ from torch.nn.parallel import DistributedDataParallel
 from tqdm import tqdm
 
 from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.format import IndexEntry
 from affnerf.errors import AffnerfError
 from affnerf.fileio import write_json_atomic
+from affnerf.model.base import ConditionedNeRF
+from affnerf.model.raymarch import RayOutputs
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
-from affnerf.train.cache import ObjectFrames, cached_frames
+from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
 from affnerf.train.config import TrainConfig
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
-from affnerf.train.loss import nerf_loss
-from affnerf.train.sampler import RaySampler
+from affnerf.train.loss import nerf_loss, occupancy_slab, point_loss
+from affnerf.train.points import PointSet
+from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.state import TrainingState, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
@@ -81,7 +85,7 @@ def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> l
     if not entries:
         wanted = config.categories or "all"
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no training objects (split train, categories {wanted})")
-    cache = Path(config.cache_dir) if config.cache_dir else Path(config.out) / "cache"
+    cache = _cache_dir(config)
     crop = config.model.encoder_resolution
     mine = entries[ctx.rank :: ctx.world]
     bar = tqdm(mine, desc="caching frames", unit="obj", disable=not (config.progress and ctx.is_main))
@@ -89,6 +93,49 @@ def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> l
         cached_frames(ds.load_object(entry), cache, config.image_scale, crop)
     dist_utils.barrier(ctx)
     return [cached_frames(ds.load_object(e), cache, config.image_scale, crop) for e in entries]
+
+
+def _cache_dir(config: TrainConfig) -> Path:
+    return Path(config.cache_dir) if config.cache_dir else Path(config.out) / "cache"
+
+
+def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> dict[str, PointSet]:
+    """Make (once) and memory-map the training objects' 3D supervision points; ranks share the work."""
+    entries = ds.objects("train", config.categories)
+    sigmas = (config.point_sigma_near, config.point_sigma_far)
+    if config.points_per_object < 1 or min(sigmas) < 0:
+        raise AffnerfError("--points-weight needs --points-per-object >= 1 and point sigmas >= 0")
+
+    def points(entry: IndexEntry) -> PointSet:
+        mesh = ds.root / entry.path / "mesh.ply"
+        return cached_points(mesh, entry.id, _cache_dir(config), config.model.scene_half_extent, sigmas)
+
+    show = config.progress and ctx.is_main
+    for entry in tqdm(entries[ctx.rank :: ctx.world], desc="caching points", unit="obj", disable=not show):
+        points(entry)
+    dist_utils.barrier(ctx)
+    return {e.id: points(e) for e in entries}
+
+
+class TrainingPass(torch.nn.Module):
+    """One training forward pass of a model: encode the input views, render the rays and, when points are given,
+    evaluate both fields there with the same codes (one module call, so DistributedDataParallel sees it all)."""
+
+    def __init__(self, model: ConditionedNeRF) -> None:
+        super().__init__()
+        self.model = model
+
+    def forward(
+        self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
+    ) -> tuple[RayOutputs, RayOutputs | None, list[tuple[torch.Tensor, torch.Tensor]] | None]:
+        """(coarse, fine, per-field (density, logits) at the points or None), as ``model.forward`` + points."""
+        m = self.model
+        encoding = m.encode_views(batch.images, batch.input_intrinsics, batch.input_poses)
+        coarse, fine = m.render_rays(
+            encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
+        )
+        geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
+        return coarse, fine, geometry
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
@@ -108,8 +155,8 @@ class Trainer:
         step: steps done so far (restored from the checkpoint when resuming).
         end: the step this invocation stops at: ``stop_at`` when set, else ``steps``.
         scalars: the latest logged scalars, reported in the summary.
-        dataset, state, net, logger, bar, hooks: made by :meth:`setup`; ``net`` is ``state.model``, wrapped in
-            DistributedDataParallel when there are several processes.
+        dataset, state, net, logger, bar, hooks: made by :meth:`setup`; ``net`` is the :class:`TrainingPass` of
+            ``state.model``, wrapped in DistributedDataParallel when there are several processes.
     """
 
     dataset: Dataset
@@ -127,19 +174,23 @@ class Trainer:
         self.scalars: dict[str, float] = {}
 
     def setup(self) -> None:
-        """Open the dataset, prepare the run folder, cache the training frames, build the model, optimiser and
-        sampler, restore the last checkpoint when resuming, and make the logger, progress bar and hooks."""
+        """Open the dataset, prepare the run folder, cache the training frames (and, with ``points_weight`` > 0,
+        the point sets), build the model, optimiser and samplers, restore the last checkpoint when resuming, and
+        make the logger, progress bar and hooks."""
         config, ctx = self.config, self.ctx
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
         self.state = self._build_state(_load_frames(config, self.dataset, ctx))
+        if config.points_weight > 0:
+            points = _load_points(config, self.dataset, ctx)
+            self.state.points = PointSampler(points, config.points_per_object, config.seed, ctx.rank)
         if resume_from is not None:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
-        self.net = self.state.model
+        self.net = TrainingPass(self.state.model)
         if ctx.distributed:
             device_ids = [ctx.device.index] if ctx.device.type == "cuda" else None
-            self.net = DistributedDataParallel(self.state.model, device_ids=device_ids)
+            self.net = DistributedDataParallel(self.net, device_ids=device_ids)
         self.hooks = self._make_hooks()
         self.state.model.train()
 
@@ -195,42 +246,47 @@ class Trainer:
     def train_iteration(self, step: int) -> IterationOutputs:
         """One optimisation step taken at ``step`` (steps done so far, 0-based).
 
-        Sets the learning rate, draws a batch (B = ``objects_per_step`` objects, R = ``rays_per_step`` rays),
-        renders the R rays coarse and fine from the B objects' encoded views, back-propagates the loss and steps
-        Adam. Returns 0-d detached tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and
-        ``train/affordance_accuracy`` of the finest pass (the fine one, the coarse one in a coarse-only model),
-        with the ``train/lr`` used (a float).
+        Sets the learning rate, draws a batch (B = ``objects_per_step`` objects, R = ``rays_per_step`` rays, and
+        with ``points_weight`` > 0, ``points_per_object`` points of each object), renders the R rays coarse and
+        fine from the B objects' encoded views, back-propagates the loss and steps Adam. Returns 0-d detached
+        tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
+        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
+        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field.
         """
         config, state = self.config, self.state
         lr = learning_rate(config, step)
         for group in state.optimizer.param_groups:
             group["lr"] = lr
         batch = state.sampler.next_batch().to(self.ctx.device)
-        coarse, fine = self.net(
-            batch.images,
-            batch.input_intrinsics,
-            batch.input_poses,
-            batch.ray_object,
-            batch.origins,
-            batch.dirs,
-            batch.background,
-            True,
-            state.generator,
-        )
-        terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight)
+        points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
+        total, outputs = self._loss(batch, points)
         state.optimizer.zero_grad(set_to_none=True)
-        terms.total.backward()
+        total.backward()
         if config.optim.grad_clip > 0:
             torch.nn.utils.clip_grad_norm_(state.model.parameters(), config.optim.grad_clip)
         state.optimizer.step()
+        return {"loss/total": total.detach(), **outputs, "train/lr": lr}
+
+    def _loss(self, batch: RayBatch, points: PointBatch | None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """The step's total loss and its detached parts (see :meth:`train_iteration`)."""
+        config = self.config
+        coarse, fine, geometry = self.net(batch, self.state.generator, points)
+        terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
-        return {
-            "loss/total": terms.total.detach(),
+        parts = {
             "loss/mse": (terms.mse_fine if fine is not None else terms.mse_coarse).detach(),
             "loss/affordance_ce": (terms.ce_fine if fine is not None else terms.ce_coarse).detach(),
             "train/affordance_accuracy": (final.affordance.detach().argmax(-1) == batch.labels).float().mean(),
-            "train/lr": lr,
         }
+        if points is None or geometry is None:
+            return terms.total, parts
+        slab = occupancy_slab(config.model.surface_density)
+        extra = point_loss(
+            geometry, points.occupancy, points.labels, slab, config.points_weight, config.point_affordance_weight
+        )
+        parts["loss/occupancy"] = extra.occupancy_last.detach()
+        parts["loss/point_affordance"] = extra.affordance_last.detach()
+        return terms.total + extra.total, parts
 
     def after_iteration(self, outputs: IterationOutputs, out_of_time: bool) -> None:
         """Run every hook, in order, with the step just done, the iteration's outputs and the run's scalars."""
