@@ -44,9 +44,10 @@ def spread(values: list[float | None]) -> float | None:
         >>> spread([0.5, 0.75, 0.25]), spread([0.5, None])
         (0.5, None)
     """
-    if not values or any(v is None or not math.isfinite(v) for v in values):
+    finite = [float(v) for v in values if v is not None and math.isfinite(v)]
+    if not finite or len(finite) < len(values):
         return None
-    return float(max(values) - min(values))  # type: ignore[type-var]
+    return max(finite) - min(finite)
 
 
 @dataclass
