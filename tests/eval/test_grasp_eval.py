@@ -1,68 +1,78 @@
-"""``affnerf eval grasp`` end to end on a tiny run: both conditions, scores on the ground truth, Table 3."""
+"""``affnerf eval grasp`` end to end on a tiny run: the 2×2 (true or predicted mesh × whole surface or task part),
+scores on the true mesh at metric size, Table 3; and the summary on hand-built numbers."""
 
 from __future__ import annotations
 
 import json
 
+import pytest
+
 from affnerf.cli.main import main
-from affnerf.eval.grasps import summarise
+from affnerf.eval.grasp_table import CONDITIONS, LABELS, summarise, table3_markdown
 
 
-def test_grasp_eval_writes_table3(trained_runs, train_dataset, tmp_path):
+def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path):
     out = tmp_path / "grasps"
-    args = [
-        "eval",
-        "grasp",
-        "--run",
-        str(trained_runs["affnerf"]),
-        "--data",
-        str(train_dataset),
-        "--out",
-        str(out),
-        "--categories",
-        "screwdriver",
-        "--num",
-        "4",
-        "--lift-grasps",
-        "2",
-        "--resolution",
-        "32",
-        "--level",
-        "0.5",
-        "--refine-steps",
-        "2",
-        "--device",
-        "cpu",
-    ]
+    args = ["eval", "grasp", "--run", str(trained_runs["affnerf"]), "--data", str(train_dataset), "--out", str(out)]
+    args += ["--categories", "screwdriver,bottle", "--max-objects", "1", "--num", "4"]
+    args += ["--lift-grasps", "1", "--resolution", "32", "--level", "0.5", "--refine-steps", "2", "--device", "cpu"]
     assert main(args) == 0
     objects = json.loads((out / "grasp_objects.json").read_text())
-    assert {o["category"] for o in objects} == {"screwdriver"}
+    assert sorted(o["category"] for o in objects) == ["bottle", "screwdriver"]
     for o in objects:
-        original = o["original"]
-        assert original["grasps"] > 0 and all(e >= 0 for e in original["epsilon"])
-        assert len(original["on_grasp"]) == original["grasps"] and len(original["lift"]) <= 2
+        assert set(CONDITIONS) <= set(o) and o["task"] == "grasp"
+        assert 0.1 < o["size"]["largest_side"] < 0.4 and o["mass"] > 0  # metric, not the canonical 0.44 m
+        true_whole = o["true_whole"]
+        assert true_whole["grasps"] > 0 and true_whole["no_grasp"] is None
+        assert all(e >= 0 for e in true_whole["epsilon"]) and len(true_whole["lift"]) == 1
+        assert len(true_whole["on_part"]) == true_whole["grasps"]
+        part = o["true_part"]
+        assert part["grasps"] == 0 or all(part["on_part"])  # planned on the true part, scored on it
     metrics = json.loads((out / "grasp_metrics.json").read_text())
-    assert set(metrics["mean"]) == {"original", "affordance"}
+    assert set(metrics["mean"]) == set(CONDITIONS)
+    assert metrics["categories"]["screwdriver"]["true_whole"]["epsilon_ratio"] == pytest.approx(1.0)
     table = (out / "table3.md").read_text()
-    assert "| Original model (no affordance) |" in table and "| Affordance model |" in table
-    assert "Physics lift success rate" in table
+    assert all(f"| {LABELS[c]} |" in table for c in CONDITIONS)
+    assert "L1 grasp wrench space" in table and "μ = 0.5" in table and "soft-finger" in table
+    assert "| | bottle | screwdriver | Average |" in table and "Physics lift success" in table
 
 
-def test_summary_counts_objects_without_grasps_as_zero_quality():
+def _cond(eps, on, lift):
+    return {"grasps": len(eps), "epsilon": eps, "on_part": on, "lift": lift}
+
+
+def test_summary_ratios_shares_and_objects_without_grasps():
+    empty = _cond([], [], [])
     objects = [
         {
-            "category": "pen",
-            "original": {"grasps": 2, "epsilon": [0.2, 0.4], "on_grasp": [True, False], "lift": [True]},
-            "affordance": {"grasps": 0, "epsilon": [], "on_grasp": [], "lift": []},
+            "category": "cabinet",
+            "true_whole": _cond([0.2, 0.4], [True, False], [True]),
+            "true_part": _cond([0.15], [True], [False]),
+            "predicted_whole": empty,
+            "predicted_part": _cond([0.1], [False], [True]),
         },
         {
-            "category": "pen",
-            "original": {"grasps": 1, "epsilon": [0.1], "on_grasp": [True], "lift": [False]},
-            "affordance": {"grasps": 1, "epsilon": [0.5], "on_grasp": [True], "lift": [True]},
+            "category": "cabinet",
+            "true_whole": _cond([0.1], [True], [False]),
+            "true_part": empty,
+            "predicted_whole": _cond([0.2], [True], [True]),
+            "predicted_part": _cond([0.05], [True], [True]),
         },
     ]
-    s = summarise(objects)["categories"]["pen"]
-    assert abs(s["original"]["epsilon"] - (0.3 + 0.1) / 2) < 1e-12
-    assert abs(s["affordance"]["epsilon"] - 0.25) < 1e-12
-    assert abs(s["original"]["on_grasp_share"] - 2 / 3) < 1e-12
-    assert s["original"]["lift_success"] == 0.5 and s["affordance"]["lift_success"] == 1.0
+    s = summarise(objects)
+    c = s["categories"]["cabinet"]
+    assert c["true_whole"]["epsilon"] == pytest.approx((0.3 + 0.1) / 2)
+    assert c["true_part"]["epsilon"] == pytest.approx(0.075)  # the object without grasps counts as 0
+    assert c["true_part"]["epsilon_ratio"] == pytest.approx(0.075 / 0.2)
+    assert c["predicted_part"]["epsilon_ratio"] == pytest.approx(0.075 / 0.1)
+    assert c["true_whole"]["on_part_share"] == pytest.approx(2 / 3)
+    assert c["true_whole"]["lift_success"] == 0.5 and c["predicted_whole"]["lift_success"] == 1.0
+    assert c["true_part"]["disturb_success"] is None
+    assert s["mean"]["true_part"]["epsilon_ratio"] == pytest.approx(0.075 / 0.2)
+    table = table3_markdown(s, {"split": "test"})
+    assert "| True mesh, task part only | 0.0750 | 0.0750 |" in table
+    ratio = f"{c['true_part']['epsilon_ratio']:.2f}"  # 0.375 give or take rounding
+    assert (
+        f"| True mesh, task part only | {ratio} | {ratio} |" in table
+        and "| True mesh, whole surface | 1.00 | 1.00 |" in table
+    )

@@ -36,12 +36,13 @@ def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
 
 @app.command(name="grasp")
 def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
-    """Grasps like the paper's Table 3, and beyond it.
+    """Grasps like the paper's Table 3, as a 2×2 (conventions §6).
 
-    For each test object: plan grasps on its mesh without affordance (the paper's original model) and on the
-    affordance model predicted from one image, restricted to grasp; score every grasp on the ground-truth mesh:
-    mean Ferrari-Canny epsilon, the share of grasps with both contacts on ground-truth grasp parts, and the lift
-    success rate in physics. Writes OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
+    For each test object: plan grasps on {its true mesh, the affordance model predicted from one image} ×
+    {the whole surface, the task's affordance only (grasp; cabinet: pull)}; score every grasp on the true mesh at
+    the object's metric size (canonical / scale, or --object-size): mean Ferrari-Canny epsilon and its ratio to
+    the whole surface of the same mesh, the share of grasps with both contacts on the true task part, and the
+    lift success rate in physics. Writes OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
     """
     from affnerf.eval.grasps import run_grasp_eval
 

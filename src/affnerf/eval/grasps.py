@@ -1,10 +1,11 @@
-"""``affnerf eval grasp``: the paper's Table 3 and beyond.
+"""``affnerf eval grasp``: the paper's Table 3 as a 2×2 (conventions §6).
 
-For each test object: plan grasps (a) on its mesh without affordance, the paper's "original model", and (b) on
-the affordance model AFF-NeRF predicts from one image, restricted to ``grasp``. Every grasp is then scored on the
-ground-truth mesh: Ferrari-Canny epsilon, whether both contacts lie on ground-truth ``grasp`` parts (a grasp on a
-screwdriver's shaft or a pair of scissors' blades fails the task however stable it is), and a physics lift test
-of the best few.
+For each object, grasps are planned on {its true mesh, the affordance model AFF-NeRF predicts from one image} ×
+{the whole surface, the task's affordance only (``grasp``; cabinet: ``pull``)}. Every grasp is then scored on the
+true mesh at the object's metric size (canonical / ``scale`` of its ``transforms.json``, or ``--object-size``):
+Ferrari-Canny epsilon, whether both contacts lie on the true task part (a grasp on a screwdriver's shaft fails the
+task however stable it is), and a physics lift test of the best few. The predicted model is brought to metric
+size by the same factor as the true mesh. The table itself is :mod:`affnerf.eval.grasp_table`.
 """
 
 from __future__ import annotations
@@ -18,11 +19,13 @@ import numpy as np
 
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.errors import AffnerfError
+from affnerf.eval.grasp_table import CONDITIONS, summarise, table3_markdown, task_affordance
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PlanConfig, plan_grasps
+from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
+from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
@@ -30,8 +33,9 @@ from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_mesh
 from affnerf.predict.predictor import pick_device
 
-CONDITIONS = ("original", "affordance")
-LABELS = {"original": "Original model (no affordance)", "affordance": "Affordance model"}
+__all__ = ["CONDITIONS", "GraspEvalConfig", "evaluate_object", "run_grasp_eval", "summarise", "table3_markdown"]
+
+DEFAULT_CATEGORIES = "screwdriver,pen,scissors,eyeglasses,bottle,teapot,bucket,cabinet"
 
 
 @dataclass(frozen=True)
@@ -42,7 +46,7 @@ class GraspEvalConfig:
         run: a trained AFF-NeRF run (predicts the affordance models).
         data: the dataset (ground-truth meshes of the test objects).
         out: output folder.
-        categories: comma-separated categories.
+        categories: comma-separated categories (the paper's four, then bottle, teapot, bucket and cabinet).
         split: the split whose objects are grasped.
         num: grasps planned per object and condition.
         lift: run the physics lift test.
@@ -53,12 +57,13 @@ class GraspEvalConfig:
         refine_steps: local-search steps of the planner.
         seed: seed of the input-view choice and the planner.
         device: ``auto``, ``cpu`` or ``cuda``.
+        object_size: every object's largest side in metres (None: each object's own, from its ``scale``).
     """
 
     run: Path
     data: Path
     out: Path
-    categories: str = "screwdriver,pen,scissors,eyeglasses"
+    categories: str = DEFAULT_CATEGORIES
     split: str = "test"
     num: int = 16
     lift: bool = True
@@ -69,6 +74,7 @@ class GraspEvalConfig:
     refine_steps: int = 20
     seed: int = 0
     device: str = "auto"
+    object_size: float | None = None
 
 
 def predicted_object(
@@ -82,94 +88,79 @@ def predicted_object(
     return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
 
 
-def _lift(gt: GraspObject, grasps: list, count: int) -> list[bool]:
+def object_size(obj: ObjectData, canonical: GraspObject, config: GraspEvalConfig) -> ObjectSize:
+    """How the object's canonical meshes become metric: ``config.object_size``, else its ``scale``."""
+    scale = obj.record.extra.get("scale")
+    scale = float(scale) if isinstance(scale, (int, float)) and scale > 0 else None
+    return size_for(extent(canonical.vertices), config.object_size, scale, obj.record.category)
+
+
+def _lift(gt: GraspObject, grasps: list[Grasp], count: int, mass: float) -> list[bool]:
+    """Lift-test success of the ``count`` best grasps on the true metric mesh ``gt`` weighing ``mass``."""
     import trimesh
 
-    from affnerf.grasp.physics import lift_test
+    from affnerf.grasp.physics import LiftConfig, lift_test
 
     mesh = trimesh.Trimesh(gt.vertices, gt.faces, process=False)
-    return [bool(lift_test(mesh, g.pose, g.width).success) for g in grasps[:count]]
+    config = LiftConfig(mass=mass)
+    return [bool(lift_test(mesh, g.pose, g.width, config=config).success) for g in grasps[:count]]
 
 
-def evaluate_object(
-    loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig, gripper: ParallelJawGripper
+def _plan(mesh: GraspObject, config: PlanConfig, gripper: ParallelJawGripper) -> tuple[list[Grasp], str | None]:
+    """Grasps planned on ``mesh``, and why there are none (None when there are some)."""
+    if not len(mesh.faces):
+        return [], "no predicted surface"
+    try:
+        grasps = plan_grasps(mesh, config, gripper)
+    except AffnerfError as e:  # e.g. the prediction has no surface of the task's affordance
+        return [], str(e)
+    return grasps, None if grasps else "no grasp survived planning"
+
+
+def _condition(
+    gt: GraspObject, planning: GraspObject, plan: PlanConfig, task: str, mass: float, config: GraspEvalConfig
 ) -> dict[str, Any]:
-    """Both conditions on one object: per condition, epsilon, on-affordance flags and lift results per grasp."""
-    gt = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
+    """Plan on ``planning``, score every grasp on ``gt`` (both metric), lift the best few."""
+    gripper = ParallelJawGripper()
+    grasps, why = _plan(planning, plan, gripper)
+    scores = score_grasps(gt, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)), gripper)
+    return {
+        "grasps": len(grasps),
+        "no_grasp": why,
+        "epsilon": [s.epsilon for s in scores],
+        "on_part": [s.on(task) for s in scores],
+        "lift": _lift(gt, grasps, config.lift_grasps, mass) if config.lift and grasps else [],
+    }
+
+
+def evaluate_object(loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig) -> dict[str, Any]:
+    """The four conditions on one object (:data:`CONDITIONS`): per condition, epsilon, on-task-part flags and
+    lift results per grasp, all on the true mesh at metric size; and the size and mass used."""
+    canonical = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
+    size = object_size(obj, canonical, config)
+    gt = scaled(canonical, size.factor)
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
+    predicted = scaled(predicted_object(loaded, obj, view, config.resolution, config.level), size.factor)
+    task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(num=config.num, seed=config.seed)
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))
-    sources = {"original": (GraspObject(gt.vertices, gt.faces, None, gt.name), replace(plan, affordance="none"))}
-    predicted = predicted_object(loaded, obj, view, config.resolution, config.level)
-    sources["affordance"] = (predicted, replace(plan, affordance="grasp"))
-    result: dict[str, Any] = {"object_id": obj.record.object_id, "category": obj.record.category, "input_view": view}
-    for condition, (planning_mesh, plan_config) in sources.items():
-        try:
-            grasps = plan_grasps(planning_mesh, plan_config, gripper) if len(planning_mesh.faces) else []
-        except AffnerfError:  # the prediction has no grasp surface: no grasps for this object
-            grasps = []
-        scores = score_grasps(gt, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)), gripper)
-        result[condition] = {
-            "grasps": len(grasps),
-            "epsilon": [s.epsilon for s in scores],
-            "on_grasp": [s.on("grasp") for s in scores],
-            "lift": _lift(gt, grasps, config.lift_grasps) if config.lift and grasps else [],
-        }
+    result: dict[str, Any] = {
+        "object_id": obj.record.object_id,
+        "category": obj.record.category,
+        "input_view": view,
+        "task": task,
+        "size": size.to_json(extent(canonical.vertices)),
+        "mass": round(mass, 4),
+    }
+    for name, mesh in (("true", gt), ("predicted", predicted)):
+        for surface, affordance in (("whole", "none"), ("part", task)):
+            planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
+            result[f"{name}_{surface}"] = _condition(
+                gt, planning, replace(plan, affordance=affordance), task, mass, config
+            )
     return result
-
-
-def _mean(values: list) -> float | None:
-    return float(np.mean(values)) if len(values) else None
-
-
-def summarise(objects: list[dict[str, Any]]) -> dict[str, Any]:
-    """Per category and condition: mean epsilon, on-affordance share, lift success rate, grasps planned; and the
-    mean over categories. A condition with no grasp on an object counts its epsilon as 0 for that object."""
-    out: dict[str, Any] = {"categories": {}, "mean": {}}
-    cats = sorted({o["category"] for o in objects})
-    for cat in cats:
-        rows = [o for o in objects if o["category"] == cat]
-        out["categories"][cat] = {}
-        for cond in CONDITIONS:
-            eps = [float(np.mean(o[cond]["epsilon"])) if o[cond]["epsilon"] else 0.0 for o in rows]
-            on = [x for o in rows for x in o[cond]["on_grasp"]]
-            lift = [x for o in rows for x in o[cond]["lift"]]
-            out["categories"][cat][cond] = {
-                "epsilon": _mean(eps),
-                "on_grasp_share": _mean(on),
-                "lift_success": _mean(lift),
-                "grasps": int(sum(o[cond]["grasps"] for o in rows)),
-                "objects": len(rows),
-            }
-    for cond in CONDITIONS:
-        out["mean"][cond] = {}
-        for key in ("epsilon", "on_grasp_share", "lift_success"):
-            vals = [out["categories"][c][cond][key] for c in cats if out["categories"][c][cond][key] is not None]
-            out["mean"][cond][key] = _mean(vals)
-    return out
-
-
-def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
-    """Markdown laid out like the paper's Table 3 (epsilon, rows = conditions, columns = categories), with the
-    on-affordance share and the lift success rate as further tables."""
-    cats = sorted(summary["categories"])
-    lines = [f"# Grasps on {context.get('split', 'test')} objects, laid out like the paper's Table 3", ""]
-    for key, title in (
-        ("epsilon", "Ferrari-Canny epsilon (mean over planned grasps, scored on the ground-truth mesh)"),
-        ("on_grasp_share", "Share of grasps with both contacts on ground-truth `grasp` parts"),
-        ("lift_success", "Physics lift success rate (best grasps per object)"),
-    ):
-        lines += [f"**{title}**", "", "| | " + " | ".join(cats) + " | Average |", "|" + " --- |" * (len(cats) + 2)]
-        for cond in CONDITIONS:
-            cells = [summary["categories"][c][cond][key] for c in cats] + [summary["mean"][cond][key]]
-            fmt = [("–" if v is None else (f"{v:.4f}" if key == "epsilon" else f"{100 * v:.0f}%")) for v in cells]
-            lines.append(f"| {LABELS[cond]} | " + " | ".join(fmt) + " |")
-        lines.append("")
-    objects = {c: summary["categories"][c]["original"]["objects"] for c in cats}
-    lines += [f"Objects per category: {objects}. Settings: `{context}`", ""]
-    return "\n".join(lines)
 
 
 def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
@@ -185,8 +176,7 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
         entries = [e for c in cats for e in [x for x in entries if x.category == c][: config.max_objects]]
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no {config.split} objects of {', '.join(cats)}")
-    gripper = ParallelJawGripper()
-    objects = [evaluate_object(loaded, ds.load_object(e), config, gripper) for e in entries]
+    objects = [evaluate_object(loaded, ds.load_object(e), config) for e in entries]
     summary = summarise(objects)
     context = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
     out = Path(config.out)

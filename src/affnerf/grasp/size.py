@@ -137,7 +137,7 @@ def scaled(obj: GraspObject, factor: float) -> GraspObject:
 def rescale_poses(poses: np.ndarray, factor: float) -> np.ndarray:
     """Grasp poses (G, 4, 4) in a frame scaled by ``factor``: translations multiplied, rotations kept.
 
-    >>> rescale_poses(np.eye(4)[None] + np.eye(4, k=3)[None], 0.5)[0, 0, 3]
+    >>> float(rescale_poses(np.eye(4)[None] + np.eye(4, k=3)[None], 0.5)[0, 0, 3])
     0.5
     """
     out = np.array(poses, dtype=float, copy=True)
