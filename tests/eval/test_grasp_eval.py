@@ -25,6 +25,7 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
         true_whole = o["true_whole"]
         assert true_whole["grasps"] > 0 and true_whole["no_grasp"] is None
         assert all(e >= 0 for e in true_whole["epsilon"]) and len(true_whole["lift"]) == 1
+        assert len(true_whole["disturb"]) == 1 and (true_whole["lift"][0] or not true_whole["disturb"][0])
         assert len(true_whole["on_part"]) == true_whole["grasps"]
         part = o["true_part"]
         assert part["grasps"] == 0 or all(part["on_part"])  # planned on the true part, scored on it
@@ -35,6 +36,7 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
     assert all(f"| {LABELS[c]} |" in table for c in CONDITIONS)
     assert "L1 grasp wrench space" in table and "μ = 0.5" in table and "soft-finger" in table
     assert "| | bottle | screwdriver | Average |" in table and "Physics lift success" in table
+    assert "Lift-and-disturb success" in table
 
 
 def _cond(eps, on, lift):

@@ -4,7 +4,8 @@ For each object, grasps are planned on {its true mesh, the affordance model AFF-
 {the whole surface, the task's affordance only (``grasp``; cabinet: ``pull``)}. Every grasp is then scored on the
 true mesh at the object's metric size (canonical / ``scale`` of its ``transforms.json``, or ``--object-size``):
 Ferrari-Canny epsilon, whether both contacts lie on the true task part (a grasp on a screwdriver's shaft fails the
-task however stable it is), and a physics lift test of the best few. The predicted model is brought to metric
+task however stable it is), and a physics lift test of the best few, then a
+disturbance (a turn about the closing axis and a shake) of those lifted. The predicted model is brought to metric
 size by the same factor as the true mesh. The table itself is :mod:`affnerf.eval.grasp_table`.
 """
 
@@ -51,6 +52,8 @@ class GraspEvalConfig:
         num: grasps planned per object and condition.
         lift: run the physics lift test.
         lift_grasps: best grasps per object and condition lifted in physics.
+        disturb: after each successful lift, turn the object ±90° about the closing axis and shake it
+            (:mod:`affnerf.grasp.disturb`).
         resolution: marching-cubes resolution of the predicted models.
         level: density level of the predicted surfaces (None: the model config's ``surface_density``).
         max_objects: at most this many objects per category (0 = all).
@@ -68,6 +71,7 @@ class GraspEvalConfig:
     num: int = 16
     lift: bool = True
     lift_grasps: int = 5
+    disturb: bool = True
     resolution: int = 128
     level: float | None = None
     max_objects: int = 0
@@ -95,15 +99,20 @@ def object_size(obj: ObjectData, canonical: GraspObject, config: GraspEvalConfig
     return size_for(extent(canonical.vertices), config.object_size, scale, obj.record.category)
 
 
-def _lift(gt: GraspObject, grasps: list[Grasp], count: int, mass: float) -> list[bool]:
-    """Lift-test success of the ``count`` best grasps on the true metric mesh ``gt`` weighing ``mass``."""
+def _lift(gt: GraspObject, grasps: list[Grasp], count: int, mass: float, disturb: bool) -> tuple[list, list]:
+    """Lift-test success of the ``count`` best grasps on the true metric mesh ``gt`` weighing ``mass``, and (when
+    ``disturb``) whether each is still held after the disturbance (False after a failed lift; else empty)."""
     import trimesh
 
+    from affnerf.grasp.disturb import lift_and_disturb
     from affnerf.grasp.physics import LiftConfig, lift_test
 
     mesh = trimesh.Trimesh(gt.vertices, gt.faces, process=False)
     config = LiftConfig(mass=mass)
-    return [bool(lift_test(mesh, g.pose, g.width, config=config).success) for g in grasps[:count]]
+    if not disturb:
+        return [bool(lift_test(mesh, g.pose, g.width, config=config).success) for g in grasps[:count]], []
+    results = [lift_and_disturb(mesh, g.pose, g.width, config=config) for g in grasps[:count]]
+    return [bool(lift.success) for lift, _ in results], [bool(d is not None and d.held) for _, d in results]
 
 
 def _plan(mesh: GraspObject, config: PlanConfig, gripper: ParallelJawGripper) -> tuple[list[Grasp], str | None]:
@@ -124,12 +133,14 @@ def _condition(
     gripper = ParallelJawGripper()
     grasps, why = _plan(planning, plan, gripper)
     scores = score_grasps(gt, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)), gripper)
+    lift, disturb = _lift(gt, grasps, config.lift_grasps, mass, config.disturb) if config.lift else ([], [])
     return {
         "grasps": len(grasps),
         "no_grasp": why,
         "epsilon": [s.epsilon for s in scores],
         "on_part": [s.on(task) for s in scores],
-        "lift": _lift(gt, grasps, config.lift_grasps, mass) if config.lift and grasps else [],
+        "lift": lift,
+        "disturb": disturb,
     }
 
 

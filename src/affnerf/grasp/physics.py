@@ -26,7 +26,9 @@ from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pybullet
@@ -245,6 +247,20 @@ def lift_test(
     Raises:
         AffnerfError: a malformed pose or width, or a mesh that is empty or encloses no volume.
     """
+    return simulate(mesh, pose, width, gripper, config)[0]
+
+
+def simulate(
+    mesh: trimesh.Trimesh,
+    pose: np.ndarray,
+    width: float,
+    gripper: ParallelJawGripper = ParallelJawGripper(),
+    config: LiftConfig = LiftConfig(),
+    after: Callable[[Rig, np.ndarray], Any] | None = None,
+) -> tuple[LiftResult, Any]:
+    """:func:`lift_test`, then, after a successful lift, ``after(rig, held_at)`` with the simulation still
+    running (``held_at``: where the grasp centre is held, (3,)); returns the lift's result and ``after``'s (None
+    when it did not run)."""
     pose = _checked_pose(pose, width, gripper)
     parts = convex_parts(mesh)
     opening = min(width + config.open_margin, gripper.max_opening)
@@ -260,13 +276,16 @@ def lift_test(
         obj = add_object(client, parts, config)
         start = pose[:3, 3] - config.approach_distance * pose[:3, 2]
         grip = add_gripper(client, gripper, opening, np.block([[pose[:3, :3], start[:, None]], [pose[3:]]]), config)
-        return _run(client, obj, grip, pose, start, opening, config)
+        result, rig = _run(client, obj, grip, pose, start, opening, config)
+        if after is None or not result.success or rig is None:
+            return result, None
+        return result, after(rig, pose[:3, 3] + np.array([0.0, 0.0, config.lift_height]))
     finally:
         client.disconnect()
 
 
 @dataclass
-class _Rig:
+class Rig:
     """The simulated gripper driven by a fixed constraint, its fingers, and the object it acts on."""
 
     client: BulletClient
@@ -313,27 +332,28 @@ class _Rig:
 
 def _run(
     client: BulletClient, obj: int, grip: int, pose: np.ndarray, start: np.ndarray, opening: float, config: LiftConfig
-) -> LiftResult:
-    """Steps 2-5 of the protocol; the gripper stands at ``start``, the object at rest."""
+) -> tuple[LiftResult, Rig | None]:
+    """Steps 2-5 of the protocol; the gripper stands at ``start``, the object at rest. Returns the result and the
+    rig (None when it never got attached)."""
     client.performCollisionDetection()
     if any(p[8] < -config.penetration_tolerance for p in client.getClosestPoints(obj, grip, 0.0)):
-        return LiftResult(False, 0.0, False, "collision at start")
-    rig = _Rig.attach(client, obj, grip, pose, start, config)
+        return LiftResult(False, 0.0, False, "collision at start"), None
+    rig = Rig.attach(client, obj, grip, pose, start, config)
     initial = rig.object_position()
     rig.fingers(0.0)  # held open
     for s in _ramp(config.approach_time, config):
         rig.move(start + s * (pose[:3, 3] - start))
     if np.linalg.norm(rig.object_position() - initial) > config.approach_tolerance:
-        return LiftResult(False, 0.0, False, "collision on approach")
+        return LiftResult(False, 0.0, False, "collision on approach"), rig
     rig.fingers(opening / 2.0)  # the pads would meet at the grasp centre
     for _ in _ramp(config.close_time, config):
         rig.move(pose[:3, 3])
     if rig.touching() < 2:
-        return LiftResult(False, 0.0, False, "no contact")
-    return _lift_and_hold(rig, pose[:3, 3])
+        return LiftResult(False, 0.0, False, "no contact"), rig
+    return _lift_and_hold(rig, pose[:3, 3]), rig
 
 
-def _lift_and_hold(rig: _Rig, grasp_centre: np.ndarray) -> LiftResult:
+def _lift_and_hold(rig: Rig, grasp_centre: np.ndarray) -> LiftResult:
     """Steps 4-5: gravity on, lift by ``lift_height``, hold, and judge whether the object came along."""
     config = rig.config
     rig.client.setGravity(0.0, 0.0, -config.gravity)
