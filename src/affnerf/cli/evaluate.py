@@ -41,8 +41,9 @@ def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
     For each test object: plan grasps on {its true mesh, the affordance model predicted from one image} ×
     {the whole surface, the task's affordance only (grasp; cabinet: pull)}; score every grasp on the true mesh at
     the object's metric size (canonical / scale, or --object-size): mean Ferrari-Canny epsilon and its ratio to
-    the whole surface of the same mesh, the share of grasps with both contacts on the true task part, and the
-    lift success rate in physics. Writes OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
+    the whole surface of the same mesh, the share of grasps with both contacts on the true task part, the lift
+    success rate in physics and, beside it, lift-and-disturb success. Writes OUT/table3.md, OUT/grasp_metrics.json
+    and OUT/grasp_objects.json.
     """
     from affnerf.eval.grasps import run_grasp_eval
 
