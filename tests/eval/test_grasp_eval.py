@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
+from PIL import Image
 
 from affnerf.cli.main import main
 from affnerf.eval.grasp_table import CONDITIONS, LABELS, summarise, table3_markdown
@@ -37,6 +39,9 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
     assert "L1 grasp wrench space" in table and "μ = 0.5" in table and "soft-finger" in table
     assert "| | bottle | screwdriver | Average |" in table and "Physics lift success" in table
     assert "Lift-and-disturb success" in table
+    for category in ("bottle", "screwdriver"):  # four panels: a title strip and three 200 px views each
+        picture = np.asarray(Image.open(out / f"grasps_{category}.png"))
+        assert picture.shape == (4 * (18 + 200), 600, 3) and picture.std() > 10
 
 
 def _cond(eps, on, lift):

@@ -61,6 +61,7 @@ class GraspEvalConfig:
         seed: seed of the input-view choice and the planner.
         device: ``auto``, ``cpu`` or ``cuda``.
         object_size: every object's largest side in metres (None: each object's own, from its ``scale``).
+        pictures: write OUT/grasps_<category>.png: the first object's four planning meshes with their best grasps.
     """
 
     run: Path
@@ -79,6 +80,7 @@ class GraspEvalConfig:
     seed: int = 0
     device: str = "auto"
     object_size: float | None = None
+    pictures: bool = True
 
 
 def predicted_object(
@@ -128,13 +130,13 @@ def _plan(mesh: GraspObject, config: PlanConfig, gripper: ParallelJawGripper) ->
 
 def _condition(
     gt: GraspObject, planning: GraspObject, plan: PlanConfig, task: str, mass: float, config: GraspEvalConfig
-) -> dict[str, Any]:
+) -> tuple[list[Grasp], dict[str, Any]]:
     """Plan on ``planning``, score every grasp on ``gt`` (both metric), lift the best few."""
     gripper = ParallelJawGripper()
     grasps, why = _plan(planning, plan, gripper)
     scores = score_grasps(gt, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)), gripper)
     lift, disturb = _lift(gt, grasps, config.lift_grasps, mass, config.disturb) if config.lift else ([], [])
-    return {
+    return grasps, {
         "grasps": len(grasps),
         "no_grasp": why,
         "epsilon": [s.epsilon for s in scores],
@@ -144,9 +146,12 @@ def _condition(
     }
 
 
-def evaluate_object(loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig) -> dict[str, Any]:
+def evaluate_object(
+    loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig, picture: Path | None = None
+) -> dict[str, Any]:
     """The four conditions on one object (:data:`CONDITIONS`): per condition, epsilon, on-task-part flags and
-    lift results per grasp, all on the true mesh at metric size; and the size and mass used."""
+    lift results per grasp, all on the true mesh at metric size; and the size and mass used. With ``picture``,
+    also a PNG there of each condition's planning mesh with its best grasps."""
     canonical = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
     size = object_size(obj, canonical, config)
     gt = scaled(canonical, size.factor)
@@ -165,17 +170,27 @@ def evaluate_object(loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfi
         "size": size.to_json(extent(canonical.vertices)),
         "mass": round(mass, 4),
     }
+    panels = {}
     for name, mesh in (("true", gt), ("predicted", predicted)):
         for surface, affordance in (("whole", "none"), ("part", task)):
             planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
-            result[f"{name}_{surface}"] = _condition(
-                gt, planning, replace(plan, affordance=affordance), task, mass, config
-            )
+            cond = f"{name}_{surface}"
+            grasps, result[cond] = _condition(gt, planning, replace(plan, affordance=affordance), task, mass, config)
+            panels[cond] = (mesh, grasps)
+    if picture is not None:
+        from affnerf.eval.grasp_pictures import write_category_picture
+
+        write_category_picture(picture, panels)
     return result
 
 
+def _picture_path(out: Path, category: str, config: GraspEvalConfig) -> Path | None:
+    return out / f"grasps_{category}.png" if config.pictures else None
+
+
 def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
-    """Evaluate every object; write ``grasp_objects.json``, ``grasp_metrics.json`` and ``table3.md``."""
+    """Evaluate every object; write ``grasp_objects.json``, ``grasp_metrics.json``, ``table3.md`` and (with
+    ``pictures``) ``grasps_<category>.png`` of each category's first object."""
     started = time.perf_counter()
     ds = Dataset.open(config.data)
     loaded = load_model(config.run, pick_device(config.device))
@@ -187,11 +202,17 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
         entries = [e for c in cats for e in [x for x in entries if x.category == c][: config.max_objects]]
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no {config.split} objects of {', '.join(cats)}")
-    objects = [evaluate_object(loaded, ds.load_object(e), config) for e in entries]
-    summary = summarise(objects)
-    context = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
+    firsts = {e.category: e.id for e in reversed(entries)}  # the first object of each category
+    objects = [
+        evaluate_object(loaded, ds.load_object(e), config, _picture_path(out, e.category, config))
+        if firsts[e.category] == e.id
+        else evaluate_object(loaded, ds.load_object(e), config)
+        for e in entries
+    ]
+    summary = summarise(objects)
+    context = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
     write_json_atomic(out / "grasp_objects.json", objects)
     write_json_atomic(out / "grasp_metrics.json", {**summary, "settings": context})
     (out / "table3.md").write_text(table3_markdown(summary, context))
