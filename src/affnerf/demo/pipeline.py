@@ -57,6 +57,7 @@ def run_pipeline(config: DemoConfig) -> dict[str, Any]:
             method="affnerf,retrieval,constant",
             target_views=4,
             scale=0.5,
+            mesh_resolution=64,
             device=config.device,
         )
     )
