@@ -211,3 +211,22 @@ def test_page_renders_the_mesh_in_headless_chromium(prediction: Path, tmp_path: 
     where = f"screenshot: {tmp_path / 'viewer.png'}"
     assert distinct > 500, f"the 3D canvas looks blank ({distinct} distinct colours); {where}"
     assert min(counts.values()) > 2000, f"the affordance classes are not drawn (pixels per class {counts}); {where}"
+
+
+def test_metric_grasps_are_drawn_on_the_canonical_mesh(tmp_path):
+    """A grasps.json in the metric frame (size.scale 2: the canonical mesh is twice the real object) is brought
+    back to the mesh: positions and the gripper itself grow by the scale."""
+    from affnerf.grasp.io import write_grasps
+    from affnerf.grasp.planner import Grasp
+    from affnerf.viewer.loading import load_grasps
+
+    hand = ParallelJawGripper()
+    pose = grasp_pose(np.array([0.01, 0.02, 0.03]), np.array([1.0, 0, 0]), np.array([0, 0, -1.0]))
+    grasp = Grasp(pose=pose, width=0.04, contacts=np.zeros((2, 3)), epsilon=0.01, affordance=["grasp", "grasp"])
+    plain, metric = tmp_path / "plain.json", tmp_path / "metric.json"
+    write_grasps(plain, [grasp], "mesh.ply", "grasp", hand)
+    write_grasps(metric, [grasp], "mesh.ply", "grasp", hand, {"scale": 2.0, "largest_side": 0.2, "source": "test"})
+    (a,), (b,) = load_grasps(plain), load_grasps(metric)
+    assert np.allclose(b.pose[:3, 3], 2 * a.pose[:3, 3]) and np.allclose(b.pose[:3, :3], a.pose[:3, :3])
+    assert np.allclose(b.mesh.extents, 2 * a.mesh.extents)
+    assert b.width == a.width == 0.04  # the opening is reported in metres

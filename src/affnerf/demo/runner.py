@@ -17,6 +17,7 @@ from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
 from affnerf.grasp.planner import PlanConfig, plan_grasps
+from affnerf.grasp.size import CATEGORY_SIZE, extent, resolve_size, scaled
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.pictures.meshes import mesh_preview
@@ -72,13 +73,16 @@ def demo_example(predictor: Predictor, image: Path, out: Path, config: DemoConfi
         mesh = read_labelled_ply(mesh_file)
         Image.fromarray(mesh_preview(mesh)).save(out / "mesh_preview.png")
         start = time.perf_counter()
-        obj = GraspObject.from_mesh(mesh, str(mesh_file))
+        canonical = GraspObject.from_mesh(mesh, str(mesh_file))
+        size = resolve_size(mesh_file, canonical.vertices, None, image.stem if image.stem in CATEGORY_SIZE else None)
+        obj = scaled(canonical, size.factor)  # grasps at the category's typical size, in metres
         present = set(summary["classes_present"])
         wanted = next((a for a in GRASP_AFFORDANCES if a in present), "none")
         hand = ParallelJawGripper()
         grasps = plan_grasps(obj, PlanConfig(affordance=wanted, num=config.grasps, refine=PlanConfig().refine), hand)
         (out / "grasps").mkdir(exist_ok=True)
-        write_grasps(out / "grasps" / "grasps.json", grasps, str(mesh_file), wanted, hand)
+        size_json = size.to_json(extent(canonical.vertices))
+        write_grasps(out / "grasps" / "grasps.json", grasps, str(mesh_file), wanted, hand, size_json)
         export_scene(out / "grasps" / "grasps.glb", obj, grasps, hand)
         if grasps:
             save_png(out / "grasps" / "grasps.png", render_grasps(obj, grasps, hand))
@@ -87,6 +91,8 @@ def demo_example(predictor: Predictor, image: Path, out: Path, config: DemoConfi
             "affordance": wanted,
             "count": len(grasps),
             "best_epsilon": max((g.epsilon for g in grasps), default=0.0),
+            "largest_side_m": size_json["largest_side"],
+            "size_source": size.source,
         }
         timing["grasp"] = time.perf_counter() - start
     else:

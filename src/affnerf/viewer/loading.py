@@ -46,11 +46,11 @@ class GraspModel:
 
     Attributes:
         rank: position in the file, 0 = best.
-        pose: (4, 4) grasp frame -> object frame.
+        pose: (4, 4) grasp frame -> frame of the mesh the grasps were planned on (canonical for predictions).
         width: opening, metres.
         epsilon: Ferrari-Canny epsilon when the file has it.
         affordance: affordance at the contacts when the file has it.
-        mesh: the gripper (fingers and palm) in the object frame.
+        mesh: the gripper (fingers and palm) in that frame, scaled with it.
     """
 
     rank: int
@@ -139,20 +139,26 @@ def _gripper_from(spec: object) -> ParallelJawGripper:
 
 
 def load_grasps(path: Path) -> list[GraspModel]:
-    """The grasps of a ``grasps.json`` with their gripper models, in the file's order (best first).
+    """The grasps of a ``grasps.json`` with their gripper models, in the file's order (best first), placed in the
+    frame of the mesh they were planned on: a file in the metric frame (``size.scale`` given) is brought back to the
+    canonical mesh by that scale, gripper included, so it sits where it grasps.
 
     Raises:
         AffnerfError: naming the file when it is missing, not JSON or not a grasps file.
     """
-    from affnerf.grasp.io import read_grasps
+    from affnerf.grasp.io import read_grasp_scale, read_grasps
 
     poses = read_grasps(path)
+    scale = read_grasp_scale(path) or 1.0
     data = json.loads(Path(path).read_text())
     hand = _gripper_from(data.get("gripper"))
     out = []
     for rank, ((pose, width), entry) in enumerate(zip(poses, data["grasps"], strict=True)):
         mesh = trimesh.util.concatenate(hand.meshes(width))
         mesh.apply_transform(pose)
+        mesh.apply_scale(scale)
+        pose = pose.copy()
+        pose[:3, 3] *= scale
         eps = entry.get("epsilon")
         epsilon = float(eps) if isinstance(eps, (int, float)) else None
         aff = entry.get("affordance")
