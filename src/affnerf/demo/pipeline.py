@@ -18,6 +18,20 @@ from affnerf.train.config import SMALL
 from affnerf.train.trainer import train
 
 
+def _train_small(data: Path, run: Path, config: DemoConfig) -> None:
+    """The small configuration for ``config.train_minutes`` (resuming a run folder left by an earlier demo)."""
+    resume = (run / "checkpoints").is_dir()
+    train(replace(SMALL, data=data, out=run, steps=10**6, time_limit=config.train_minutes, val_every=0,
+                  resume=resume, device=config.device))  # fmt: skip
+
+
+def _evaluate_small(data: Path, run: Path, out: Path, config: DemoConfig) -> dict[str, Any]:
+    """AFF-NeRF, retrieval and the constant floor on the test split: 4 targets at half size, meshes at 64^3."""
+    eval_config = EvalConfig(run=run, data=data, out=out, method="affnerf,retrieval,constant", target_views=4,
+                             scale=0.5, mesh_resolution=64, device=config.device)  # fmt: skip
+    return run_eval(eval_config)
+
+
 def run_pipeline(config: DemoConfig) -> dict[str, Any]:
     """Generate a small dataset, train the small configuration, evaluate, predict and grasp; returns the stage
     timings (seconds) and where everything went."""
@@ -29,38 +43,14 @@ def run_pipeline(config: DemoConfig) -> dict[str, Any]:
         print(f"[{name}] {stages[name]:.1f} s", flush=True)
 
     t = time.perf_counter()
-    data = out / "dataset"
+    data, run = out / "dataset", out / "run"
     generate_dataset(GenerateConfig(out=data, objects_per_category=3, views=24, width=200, height=150, workers=2))
     stage("generate", t)
     t = time.perf_counter()
-    run = out / "run"
-    resume = (run / "checkpoints").is_dir()
-    train(
-        replace(
-            SMALL,
-            data=data,
-            out=run,
-            steps=10**6,
-            time_limit=config.train_minutes,
-            val_every=0,
-            resume=resume,
-            device=config.device,
-        )
-    )
+    _train_small(data, run, config)
     stage("train", t)
     t = time.perf_counter()
-    evaluation = run_eval(
-        EvalConfig(
-            run=run,
-            data=data,
-            out=out / "eval",
-            method="affnerf,retrieval,constant",
-            target_views=4,
-            scale=0.5,
-            mesh_resolution=64,
-            device=config.device,
-        )
-    )
+    evaluation = _evaluate_small(data, run, out / "eval", config)
     stage("eval", t)
     t = time.perf_counter()
     examples = out / "examples"
