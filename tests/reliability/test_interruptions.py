@@ -9,10 +9,12 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 import torch
+from support import train_argv
 
 from affnerf.data.dataset import Dataset
 from affnerf.data.generate import GenerateConfig, generate_dataset
@@ -36,56 +38,8 @@ def _kill_when(proc: subprocess.Popen, ready, timeout: float = 120.0) -> None:
 
 
 def _train_cli(config, out: Path, steps: int, *extra: str) -> list[str]:
-    m = config.model
-    return _cli(
-        "train",
-        "--data",
-        str(config.data),
-        "--out",
-        str(out),
-        "--config",
-        "small",
-        "--image-scale",
-        "1.0",
-        "--steps",
-        str(steps),
-        "--checkpoint-every",
-        "5",
-        "--log-every",
-        "1",
-        "--val-every",
-        "0",
-        "--no-progress",
-        "--device",
-        "cpu",
-        "--cache-dir",
-        str(config.cache_dir),
-        "--rays-per-step",
-        str(config.rays_per_step),
-        "--objects-per-step",
-        str(config.objects_per_step),
-        "--model.encoder-width",
-        str(m.encoder_width),
-        "--model.encoder-resolution",
-        str(m.encoder_resolution),
-        "--model.field-width",
-        str(m.field_width),
-        "--model.field-depth",
-        str(m.field_depth),
-        "--model.num-coarse",
-        str(m.num_coarse),
-        "--model.num-fine",
-        str(m.num_fine),
-        "--model.pe-xyz",
-        str(m.pe_xyz),
-        "--model.pe-dir",
-        str(m.pe_dir),
-        "--model.color-width",
-        str(m.color_width),
-        "--model.affordance-width",
-        str(m.affordance_width),
-        *extra,
-    )
+    run = replace(config, out=out, steps=steps, checkpoint_every=5, log_every=1, val_every=0)
+    return _cli(*train_argv(run, *extra))
 
 
 def test_sigkill_during_training_then_resume_gives_the_uninterrupted_weights(tiny_train_config, tmp_path):

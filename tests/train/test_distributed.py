@@ -7,14 +7,16 @@ import math
 import os
 import subprocess
 import sys
+from dataclasses import replace
 
 import pytest
+from support import train_argv
 
 
 @pytest.mark.parametrize("points", [False, True], ids=["paper-loss", "with-points"])
 def test_two_processes_keep_identical_replicas_and_reduce_the_loss(tiny_train_config, tmp_path, points):
     config = tiny_train_config(steps=24, checkpoint_every=12)
-    m = config.model
+    run = replace(config, objects_per_step=1, log_every=1, val_every=0)
     args = [
         sys.executable,
         "-m",
@@ -24,48 +26,7 @@ def test_two_processes_keep_identical_replicas_and_reduce_the_loss(tiny_train_co
         "--standalone",
         "-m",
         "affnerf.cli.main",
-        "train",
-        "--data",
-        str(config.data),
-        "--out",
-        str(config.out),
-        "--config",
-        "small",
-        "--image-scale",
-        "1.0",
-        "--steps",
-        "24",
-        "--checkpoint-every",
-        "12",
-        "--log-every",
-        "1",
-        "--val-every",
-        "0",
-        "--no-progress",
-        "--device",
-        "cpu",
-        "--cache-dir",
-        str(config.cache_dir),
-        "--rays-per-step",
-        "128",
-        "--objects-per-step",
-        "1",
-        "--model.encoder-width",
-        str(m.encoder_width),
-        "--model.encoder-resolution",
-        str(m.encoder_resolution),
-        "--model.field-width",
-        str(m.field_width),
-        "--model.field-depth",
-        str(m.field_depth),
-        "--model.color-width",
-        str(m.color_width),
-        "--model.affordance-width",
-        str(m.affordance_width),
-        "--model.num-coarse",
-        str(m.num_coarse),
-        "--model.num-fine",
-        str(m.num_fine),
+        *train_argv(run),
         *(["--points-weight", "0.5", "--points-per-object", "128"] if points else []),
     ]
     env = {**os.environ, "OMP_NUM_THREADS": "1"}

@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import torch
+from support import train_argv
 
 from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
@@ -113,49 +114,9 @@ def test_existing_run_needs_resume_and_keeps_its_checkpoints(tiny_train_config):
 
 
 def _cli(config, *extra):
-    return [
-        "train",
-        "--data",
-        str(config.data),
-        "--out",
-        str(config.out),
-        "--config",
-        "small",
-        "--image-scale",
-        "1.0",
-        "--steps",
-        "10",
-        "--model.encoder-width",
-        "0.125",
-        "--model.encoder-resolution",
-        "32",
-        "--model.field-width",
-        "32",
-        "--model.field-depth",
-        "2",
-        "--model.color-width",
-        "16",
-        "--model.affordance-width",
-        "16",
-        "--model.num-coarse",
-        "8",
-        "--model.num-fine",
-        "8",
-        "--rays-per-step",
-        "64",
-        "--objects-per-step",
-        "2",
-        "--checkpoint-every",
-        "5",
-        "--val-every",
-        "0",
-        "--no-progress",
-        "--device",
-        "cpu",
-        "--cache-dir",
-        str(config.cache_dir),
-        *extra,
-    ]
+    model = replace(config.model, num_coarse=8, num_fine=8)
+    run = replace(config, steps=10, rays_per_step=64, checkpoint_every=5, val_every=0, model=model)
+    return train_argv(run, *extra)
 
 
 def test_checkpoint_of_another_configuration_is_a_clear_error(tiny_train_config, capsys):

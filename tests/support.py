@@ -1,0 +1,38 @@
+"""Helpers the tests import (``pythonpath = ["tests"]`` in pyproject.toml): command lines of tiny runs."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+from affnerf.train.config import SMALL, TrainConfig
+
+
+def train_argv(config: TrainConfig, *extra: str) -> list[str]:
+    """``affnerf train`` arguments that rebuild ``config`` from the ``small`` preset: its paths, the training
+    settings tiny test runs change, and every model field that differs from the preset's; ``extra`` is appended."""
+    values = {
+        "data": config.data,
+        "out": config.out,
+        "config": "small",
+        "image-scale": config.image_scale,
+        "steps": config.steps,
+        "checkpoint-every": config.checkpoint_every,
+        "log-every": config.log_every,
+        "val-every": config.val_every,
+        "device": config.device,
+        "rays-per-step": config.rays_per_step,
+        "objects-per-step": config.objects_per_step,
+    }
+    if config.cache_dir is not None:
+        values["cache-dir"] = config.cache_dir
+    for f in fields(config.model):
+        value = getattr(config.model, f.name)
+        if value != getattr(SMALL.model, f.name):
+            values[f"model.{f.name.replace('_', '-')}"] = value
+    argv = ["train", "--no-progress"]
+    for name, value in values.items():
+        if isinstance(value, bool):
+            argv.append(f"--{name}" if value else f"--{name.replace('model.', 'model.no-', 1)}")
+        else:
+            argv += [f"--{name}", str(value)]
+    return argv + list(extra)
