@@ -28,9 +28,10 @@ def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
     results = run_eval(config)
     for label, m in results.items():
         mean = m["mean"]
-        print(
-            f"{label}: mIoU {mean['mIoU']:.3f}  PA {mean['PA']:.3f}  MPA {mean['MPA']:.3f}  ({mean['objects']} objects)"
-        )
+        line = f"{label}: mIoU {mean['mIoU']:.3f}  PA {mean['PA']:.3f}  MPA {mean['MPA']:.3f}"
+        if mean.get("fscore_1cm") is not None:
+            line += f"  F@1cm {mean['fscore_1cm']:.3f}  3D mIoU {mean['affordance_miou_3d']:.3f}"
+        print(f"{line}  ({mean['objects']} objects)")
     print(f"-> {config.out / 'table2.md'}")
 
 
