@@ -15,7 +15,7 @@ from affnerf.data.cameras import (
 )
 
 
-def test_pixel_centre_direction_follows_the_guide():
+def test_pixel_centre_direction_follows_the_conventions():
     intr = Intrinsics(400, 300, 350.0, 340.0, 200.0, 150.0)
     d = pixel_directions(intr)
     u, v = 17, 250

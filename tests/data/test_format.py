@@ -38,7 +38,7 @@ def test_reader_returns_what_the_ray_caster_produced(tiny_dataset):
         assert np.abs(obj.depth(i) - expected.depth).max() <= 0.0005 + 1e-6  # 1 mm steps
 
 
-def test_transforms_follow_the_guide(tiny_dataset):
+def test_transforms_hold_the_documented_keys(tiny_dataset):
     data = json.loads((tiny_dataset / "pen" / "pen_0000" / "transforms.json").read_text())
     for key in (
         "object_id",
