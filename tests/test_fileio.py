@@ -42,3 +42,17 @@ def test_bad_json_files_name_the_file(tmp_path, content, problem):
     with pytest.raises(AffnerfError, match=problem) as info:
         read_json_file(path)
     assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
+
+
+def test_json_files_are_strict_json_with_null_for_non_finite_numbers(tmp_path):
+    import json
+
+    import numpy as np
+
+    from affnerf.fileio import write_json_atomic
+
+    path = tmp_path / "metrics.json"
+    write_json_atomic(path, {"mIoU": float("nan"), "PSNR": np.float64(np.inf), "PA": np.float32(0.25)})
+    text = path.read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    assert json.loads(text) == {"mIoU": None, "PSNR": None, "PA": 0.25}

@@ -67,7 +67,14 @@ def read_json_file(path: Path) -> Any:
 
 
 def jsonable(value: Any) -> Any:
-    """``value`` with numpy scalars and arrays, tuples and paths turned into plain JSON types, recursively."""
+    """``value`` with numpy scalars and arrays, tuples and paths turned into plain JSON types, recursively; a
+    non-finite number (a metric with nothing to average, an infinite PSNR) becomes ``None``, so the file is
+    strict JSON (``null``) that any reader accepts.
+
+    Example:
+        >>> jsonable({"a": np.float32(0.5), "b": (1, float("nan")), "c": np.array([np.inf, 2.0])})
+        {'a': 0.5, 'b': [1, None], 'c': [None, 2.0]}
+    """
     if isinstance(value, dict):
         return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -78,8 +85,8 @@ def jsonable(value: Any) -> Any:
         return bool(value)
     if isinstance(value, np.integer):
         return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
     if isinstance(value, Path):
         return str(value)
     return value
@@ -90,5 +97,5 @@ def write_json_atomic(path: Path, data: Any) -> None:
 
     A crash or a failed write leaves the previous file untouched.
     """
-    text = json.dumps(jsonable(data), indent=1).encode()
+    text = json.dumps(jsonable(data), indent=1, allow_nan=False).encode()
     atomic_write(Path(path), lambda f: f.write(text))
