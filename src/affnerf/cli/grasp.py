@@ -6,14 +6,9 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Literal
 
 from tyro.extras import SubcommandApp
-
-if TYPE_CHECKING:
-    from affnerf.grasp.gripper import ParallelJawGripper
-    from affnerf.grasp.planner import Grasp
-    from affnerf.grasp.target import GraspObject
 
 app = SubcommandApp()
 
@@ -56,44 +51,25 @@ def plan(
     """
     from dataclasses import replace
 
-    from affnerf.grasp.explain import explain_no_grasps, no_grasp_text
+    from affnerf.grasp.explain import no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper
-    from affnerf.grasp.io import summary
-    from affnerf.grasp.planner import PlanConfig, plan_grasps
-    from affnerf.grasp.size import extent, resolve_size, scaled
+    from affnerf.grasp.io import plan_into, summary
+    from affnerf.grasp.planner import PlanConfig
+    from affnerf.grasp.size import extent
     from affnerf.grasp.target import load_grasp_object
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
-    size = resolve_size(mesh, canonical.vertices, object_size, category)
-    obj = scaled(canonical, size.factor)
     config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
-    hand = ParallelJawGripper(max_opening=max_opening)
-    grasps = plan_grasps(obj, replace(config, refine=replace(config.refine, steps=refine_steps)), hand)
-    why = None if grasps else explain_no_grasps(obj, config, hand, size.source)
-    header = {"mesh": str(mesh), "affordance": affordance, "size": size.to_json(extent(canonical.vertices))}
-    _write_plan(out, obj, grasps, hand, header, why)
-    print(f"size: largest side {extent(obj.vertices):.3f} m ({size.source}); poses in metres", file=sys.stderr)
-    if why is not None:
-        print(no_grasp_text(why), file=sys.stderr)
-    print(json.dumps(summary(grasps)))
+    config = replace(config, refine=replace(config.refine, steps=refine_steps))
+    planned = plan_into(
+        out, canonical, mesh, config, ParallelJawGripper(max_opening=max_opening), object_size, category
+    )
+    source = planned.size.source
+    print(f"size: largest side {extent(planned.obj.vertices):.3f} m ({source}); poses in metres", file=sys.stderr)
+    if planned.no_grasp is not None:
+        print(no_grasp_text(planned.no_grasp), file=sys.stderr)
+    print(json.dumps(summary(planned.grasps)))
     print(f"-> {out / 'grasps.json'}")
-
-
-def _write_plan(
-    out: Path,
-    obj: GraspObject,
-    grasps: list[Grasp],
-    hand: ParallelJawGripper,
-    header: dict[str, Any],
-    why: dict[str, Any] | None,
-) -> None:
-    """OUT/grasps.json, OUT/grasps.glb and OUT/grasps.png of planned grasps on the metric object."""
-    from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
-
-    out.mkdir(parents=True, exist_ok=True)
-    write_grasps(out / "grasps.json", grasps, header["mesh"], header["affordance"], hand, header["size"], why)
-    export_scene(out / "grasps.glb", obj, grasps, hand)
-    save_png(out / "grasps.png", render_grasps(obj, grasps, hand))
 
 
 @app.command(name="score")

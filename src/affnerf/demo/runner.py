@@ -15,9 +15,9 @@ from tqdm import tqdm
 
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.io import export_scene, render_grasps, save_png, write_grasps
-from affnerf.grasp.planner import PlanConfig, plan_grasps
-from affnerf.grasp.size import CATEGORY_SIZE, extent, resolve_size, scaled
+from affnerf.grasp.io import plan_into
+from affnerf.grasp.planner import PlanConfig
+from affnerf.grasp.size import CATEGORY_SIZE, extent
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.pictures.meshes import mesh_preview
@@ -74,25 +74,18 @@ def demo_example(predictor: Predictor, image: Path, out: Path, config: DemoConfi
         Image.fromarray(mesh_preview(mesh)).save(out / "mesh_preview.png")
         start = time.perf_counter()
         canonical = GraspObject.from_mesh(mesh, str(mesh_file))
-        size = resolve_size(mesh_file, canonical.vertices, None, image.stem if image.stem in CATEGORY_SIZE else None)
-        obj = scaled(canonical, size.factor)  # grasps at the category's typical size, in metres
         present = set(summary["classes_present"])
         wanted = next((a for a in GRASP_AFFORDANCES if a in present), "none")
-        hand = ParallelJawGripper()
-        grasps = plan_grasps(obj, PlanConfig(affordance=wanted, num=config.grasps, refine=PlanConfig().refine), hand)
-        (out / "grasps").mkdir(exist_ok=True)
-        size_json = size.to_json(extent(canonical.vertices))
-        write_grasps(out / "grasps" / "grasps.json", grasps, str(mesh_file), wanted, hand, size_json)
-        export_scene(out / "grasps" / "grasps.glb", obj, grasps, hand)
-        if grasps:
-            save_png(out / "grasps" / "grasps.png", render_grasps(obj, grasps, hand))
-            grasp_png = "grasps/grasps.png"
+        category = image.stem if image.stem in CATEGORY_SIZE else None  # grasps at the category's typical size
+        plan = PlanConfig(affordance=wanted, num=config.grasps)
+        planned = plan_into(out / "grasps", canonical, mesh_file, plan, ParallelJawGripper(), category=category)
+        grasp_png = "grasps/grasps.png" if planned.grasps else None
         grasps_info = {
             "affordance": wanted,
-            "count": len(grasps),
-            "best_epsilon": max((g.epsilon for g in grasps), default=0.0),
-            "largest_side_m": size_json["largest_side"],
-            "size_source": size.source,
+            "count": len(planned.grasps),
+            "best_epsilon": max((g.epsilon for g in planned.grasps), default=0.0),
+            "largest_side_m": extent(planned.obj.vertices),
+            "size_source": planned.size.source,
         }
         timing["grasp"] = time.perf_counter() - start
     else:

@@ -3,6 +3,7 @@ grasps, and a PNG rendering of them."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -13,8 +14,10 @@ from PIL import Image
 from affnerf.data.format import check_pose
 from affnerf.errors import input_error
 from affnerf.fileio import read_json_file, write_json_atomic
+from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import Grasp
+from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.size import ObjectSize, extent, resolve_size, scaled
 from affnerf.grasp.target import GraspObject
 from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
 from affnerf.vocab import colorize_labels
@@ -149,3 +152,43 @@ def summary(grasps: list[Grasp]) -> dict[str, Any]:
         "best_epsilon": max(eps, default=0.0),
         "mean_epsilon": float(np.mean(eps)) if eps else 0.0,
     }
+
+
+@dataclass
+class PlannedGrasps:
+    """Grasps planned on an object at its metric size.
+
+    Attributes:
+        grasps: best first, poses in the metric object frame.
+        obj: the object they were planned on (metric).
+        size: how the canonical mesh became metric.
+        no_grasp: why there is no grasp (:func:`affnerf.grasp.explain.explain_no_grasps`), or None.
+    """
+
+    grasps: list[Grasp]
+    obj: GraspObject
+    size: ObjectSize
+    no_grasp: dict[str, Any] | None
+
+
+def plan_into(
+    out: Path,
+    canonical: GraspObject,
+    mesh: Path,
+    config: PlanConfig,
+    gripper: ParallelJawGripper,
+    object_size: float | None = None,
+    category: str | None = None,
+) -> PlannedGrasps:
+    """Plan grasps on a canonical mesh (read from ``mesh``) at its metric size (:func:`affnerf.grasp.size.
+    resolve_size`) and write OUT/grasps.json, OUT/grasps.glb and OUT/grasps.png; returns what was planned."""
+    size = resolve_size(mesh, canonical.vertices, object_size, category)
+    obj = scaled(canonical, size.factor)
+    grasps = plan_grasps(obj, config, gripper)
+    why = None if grasps else explain_no_grasps(obj, config, gripper, size.source)
+    out.mkdir(parents=True, exist_ok=True)
+    size_json = size.to_json(extent(canonical.vertices))
+    write_grasps(out / "grasps.json", grasps, str(mesh), config.affordance, gripper, size_json, why)
+    export_scene(out / "grasps.glb", obj, grasps, gripper)
+    save_png(out / "grasps.png", render_grasps(obj, grasps, gripper))
+    return PlannedGrasps(grasps, obj, size, why)
