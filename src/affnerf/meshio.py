@@ -73,6 +73,44 @@ def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
 
 
+def sample_surface_points(
+    vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator, weights: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Random points uniform over a triangle mesh's area (each face's area times its ``weights`` entry, e.g. a 0/1
+    mask), and the face each lies on.
+
+    Args:
+        vertices: (V, 3) positions.
+        faces: (F, 3) vertex indices.
+        count: points to draw.
+        rng: the generator.
+        weights: (F,) non-negative factors on the face areas, or None.
+
+    Returns:
+        points (count, 3) and their faces (count,); both empty when the weighted area is zero.
+
+    Example:
+        >>> tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+        >>> p, f = sample_surface_points(tri, np.array([[0, 1, 2]]), 50, np.random.default_rng(0))
+        >>> bool((p[:, :2].sum(axis=1) <= 1).all() and (p[:, 2] == 0).all()), set(f.tolist())
+        (True, {0})
+    """
+    vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64).reshape(-1, 3)
+    area = face_areas(vertices, faces) if len(faces) else np.zeros(0)
+    if weights is not None:
+        area = area * weights
+    total = float(area.sum())
+    if count <= 0 or not total > 0:
+        return np.zeros((0, 3)), np.zeros(0, np.int64)
+    chosen = rng.choice(len(faces), count, p=area / total)
+    r = rng.random((count, 2))
+    flip = r.sum(1) > 1
+    r[flip] = 1 - r[flip]
+    tri = vertices[faces[chosen]]
+    points = tri[:, 0] + r[:, :1] * (tri[:, 1] - tri[:, 0]) + r[:, 1:] * (tri[:, 2] - tri[:, 0])
+    return points, chosen
+
+
 _GEOMETRY_FIELDS = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "vertex_indices", "s", "t"}
 
 

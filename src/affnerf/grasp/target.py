@@ -12,7 +12,7 @@ import numpy as np
 from affnerf.data.raycast import RayCaster
 from affnerf.errors import input_error
 from affnerf.grasp.quality import object_radius
-from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels, read_labelled_ply
+from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels, read_labelled_ply, sample_surface_points
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 
@@ -87,17 +87,7 @@ class GraspObject:
         self, count: int, rng: np.random.Generator, face_mask: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
         """Area-weighted random surface points (count, 3) and their faces (count,), on ``face_mask`` faces."""
-        weights = self.face_areas if face_mask is None else self.face_areas * face_mask
-        total = weights.sum()
-        if total <= 0:
-            return np.zeros((0, 3)), np.zeros(0, np.int64)
-        faces = rng.choice(len(self.faces), count, p=weights / total)
-        r = rng.random((count, 2))
-        flip = r.sum(1) > 1
-        r[flip] = 1 - r[flip]
-        tri = self.vertices[self.faces[faces]]
-        points = tri[:, 0] + r[:, :1] * (tri[:, 1] - tri[:, 0]) + r[:, 1:] * (tri[:, 2] - tri[:, 0])
-        return points, faces
+        return sample_surface_points(self.vertices, self.faces, count, rng, face_mask)
 
 
 def load_grasp_object(path: Path, need_affordance: bool = False) -> GraspObject:

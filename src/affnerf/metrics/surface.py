@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from affnerf.meshio import face_areas
+from affnerf.meshio import sample_surface_points
 
 #: Surface samples per mesh.
 SURFACE_SAMPLES = 20_000
@@ -78,18 +78,9 @@ def sample_surface(
         >>> bool((s.points[:, :2].sum(axis=1) <= 1).all()), bool((s.points[:, 2] == 0).all()), set(s.labels.tolist())
         (True, True, {3})
     """
-    faces = np.asarray(faces, np.int64).reshape(-1, 3)
-    area = face_areas(np.asarray(vertices, np.float64), faces) if len(faces) else np.zeros(0)
-    total = float(area.sum())
-    if count <= 0 or not total > 0:
+    points, chosen = sample_surface_points(vertices, faces, count, np.random.default_rng(rng))
+    if not len(points):
         return empty_samples()
-    gen = np.random.default_rng(rng)
-    chosen = gen.choice(len(faces), size=count, p=area / total)
-    u, v = gen.random(count), gen.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = (np.asarray(vertices, np.float64)[faces[chosen, k]] for k in range(3))
-    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
     return SurfaceSamples(points, np.asarray(face_labels, np.int64)[chosen])
 
 
