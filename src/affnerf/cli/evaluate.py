@@ -8,6 +8,7 @@ from typing import Annotated
 import tyro
 from tyro.extras import SubcommandApp
 
+from affnerf.eval.calibrate import CalibrateConfig
 from affnerf.eval.grasps import GraspEvalConfig
 from affnerf.eval.runner import EvalConfig
 
@@ -53,6 +54,22 @@ def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
         parts = [f"{k} {v:.4f}" for k, v in m.items() if v is not None]
         print(f"{cond}: " + ", ".join(parts))
     print(f"-> {config.out / 'table3.md'}")
+
+
+@app.command(name="calibrate")
+def calibrate(config: Annotated[CalibrateConfig, tyro.conf.arg(name="")]) -> None:
+    """Choose the density level of a model's meshes (its surface_density) from the 3D metrics on a split.
+
+    For up to --max-objects objects of the split (round-robin over categories), encode the protocol's input view,
+    evaluate the density grid once and run marching cubes at each of --levels; the level with the highest mean
+    F-score at 1 cm wins (ties: higher 3D mIoU, then closest to the current level). Writes RUN/calibration.json
+    and, unless --dry-run, stores the level in the run's newest checkpoint (or the --checkpoint file).
+    """
+    from affnerf.eval.calibrate import run_calibration, sweep_lines
+
+    result = run_calibration(config)
+    for line in sweep_lines(result):
+        print(line)
 
 
 def metrics(pred: Path, gt: Path, category_map: Path | None = None, out: Path | None = None) -> None:

@@ -86,23 +86,22 @@ def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = POINTS_PER_CHU
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def extract_labelled_mesh(
-    density: PointFn,
-    labels: PointFn,
-    resolution: int,
-    level: float,
-    half_extent: float,
-    chunk: int = POINTS_PER_CHUNK,
-    occupancy: OccupancyGrid | None = None,
+def labelled_mesh_from_grid(
+    volume: np.ndarray, labels: PointFn, level: float, half_extent: float, chunk: int = POINTS_PER_CHUNK
 ) -> LabelledMesh:
-    """Marching cubes on ``density`` with vertex and face affordance labels from ``labels`` (density evaluated
-    only in the occupied cells of ``occupancy`` when given).
+    """Marching cubes at ``level`` on an already evaluated density grid, each vertex labelled by ``labels``.
+
+    Args:
+        volume: (R, R, R) density indexed [x, y, z] over [-half_extent, half_extent]^3 (:func:`evaluate_grid`).
+        labels: (N, 3) float32 points -> (N,) class ids.
+        level: density of the surface.
+        half_extent: the grid's half side.
+        chunk: points per call of ``labels``.
 
     Returns:
         A :class:`LabelledMesh` with the vertex property ``affordance``, the face property ``affordance`` and
         vertex colours of the classes (no faces if the density never reaches ``level``).
     """
-    volume = evaluate_grid(density, resolution, half_extent, chunk, occupancy)
     vertices, faces = marching_cubes(volume, level, half_extent)
     vertex_labels = (
         evaluate_points(labels, vertices, chunk).astype(np.int64) if len(vertices) else np.zeros(0, np.int64)
@@ -114,6 +113,27 @@ def extract_labelled_mesh(
         face_props={"affordance": majority_face_labels(faces, vertex_labels).astype(np.uint8)},
         vertex_colors=colorize_labels(vertex_labels),
     )
+
+
+def extract_labelled_mesh(
+    density: PointFn,
+    labels: PointFn,
+    resolution: int,
+    level: float,
+    half_extent: float,
+    chunk: int = POINTS_PER_CHUNK,
+    occupancy: OccupancyGrid | None = None,
+) -> LabelledMesh:
+    """Marching cubes on ``density`` with vertex and face affordance labels from ``labels`` (density evaluated
+    only in the occupied cells of ``occupancy`` when given): :func:`evaluate_grid`, then
+    :func:`labelled_mesh_from_grid`.
+
+    Returns:
+        A :class:`LabelledMesh` with the vertex property ``affordance``, the face property ``affordance`` and
+        vertex colours of the classes (no faces if the density never reaches ``level``).
+    """
+    volume = evaluate_grid(density, resolution, half_extent, chunk, occupancy)
+    return labelled_mesh_from_grid(volume, labels, level, half_extent, chunk)
 
 
 def model_mesh(

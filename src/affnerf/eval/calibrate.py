@@ -1,0 +1,266 @@
+"""``affnerf eval calibrate``: choose the density level of a model's meshes (``ModelConfig.surface_density``) from
+the 3D metrics on a split (conventions §5), and store it with the model.
+
+For up to ``max_objects`` objects of the split (round-robin over categories), the object is encoded from the
+protocol's seeded input view(s) (as in Table 2), the fine field's density is evaluated once on a grid (in the
+object's occupied cells, as :meth:`~affnerf.eval.methods.affnerf.ConditionedNeRFMethod.mesh` does), and marching
+cubes at each candidate level gives a labelled mesh scored against the object's true mesh: F-score at 1 cm,
+Chamfer-L1 and 3D affordance mIoU (an empty mesh scores F = 0). The level with the highest mean F-score wins; ties
+go to the higher 3D mIoU, then to the level closest to the current one. The sweep is written to
+``calibration.json`` and, unless ``dry_run``, the level replaces ``surface_density`` in the model config stored in
+the checkpoint (a field that may change in a checkpoint: ``model.config.NON_ARCHITECTURE_FIELDS``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
+from affnerf.errors import AffnerfError, input_error
+from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
+from affnerf.eval.protocol import ProtocolConfig, choose_views
+from affnerf.eval.surface import SurfaceScore, sample_seed, score_mesh, true_samples
+from affnerf.fileio import atomic_write, write_json_atomic
+from affnerf.metrics.surface import SURFACE_KEYS, SurfaceSamples
+from affnerf.predict.loading import LoadedModel, load_model, resolve_checkpoint
+from affnerf.predict.mesh import PointFn, evaluate_grid, labelled_mesh_from_grid
+from affnerf.predict.predictor import pick_device
+from affnerf.train.checkpoint import load_checkpoint
+
+#: Candidate surface densities (per metre) of the sweep.
+DEFAULT_LEVELS = (5.0, 10.0, 20.0, 35.0, 50.0, 75.0, 100.0, 150.0, 200.0)
+CALIBRATION_NAME = "calibration.json"
+
+
+@dataclass(frozen=True)
+class CalibrateConfig:
+    """Settings of ``affnerf eval calibrate``.
+
+    Attributes:
+        data: the dataset (its objects' true meshes score the levels).
+        run: a trained run folder (its newest checkpoint is calibrated) or a checkpoint file.
+        checkpoint: a single checkpoint file instead of ``run`` (e.g. the shipped ``affnerf-small.pt``).
+        split: the split whose objects score the levels.
+        levels: candidate surface densities (per metre).
+        max_objects: at most this many objects, taken round-robin over the split's categories.
+        resolution: marching-cubes samples per axis.
+        input_views: views each object is encoded from, chosen by the protocol's seed (as in Table 2).
+        seed: seed of the view choice and of the surface samples.
+        dry_run: write ``calibration.json`` only; leave the checkpoint as it is.
+        device: ``auto``, ``cpu`` or ``cuda``.
+        out: where to write ``calibration.json`` (None: RUN/calibration.json, or beside a checkpoint file as
+            ``<name>.calibration.json``).
+    """
+
+    data: Path
+    run: Path | None = None
+    checkpoint: Path | None = None
+    split: str = "val"
+    levels: tuple[float, ...] = DEFAULT_LEVELS
+    max_objects: int = 16
+    resolution: int = 96
+    input_views: int = 1
+    seed: int = 0
+    dry_run: bool = False
+    device: str = "auto"
+    out: Path | None = None
+
+
+def model_source(config: CalibrateConfig) -> Path:
+    """The run folder or checkpoint file to calibrate (exactly one of ``run`` and ``checkpoint``).
+
+    Raises:
+        AffnerfError: when neither or both are given, or the checkpoint is not a file.
+    """
+    if (config.run is None) == (config.checkpoint is None):
+        raise AffnerfError("give exactly one of --run (a run folder) and --checkpoint (a checkpoint file)")
+    if config.checkpoint is not None and not Path(config.checkpoint).is_file():
+        raise input_error(config.checkpoint, "checkpoint not found")
+    return Path(config.run if config.run is not None else config.checkpoint)  # type: ignore[arg-type]
+
+
+def calibration_path(source: Path, out: Path | None = None) -> Path:
+    """Where the sweep is written: ``out``, else ``RUN/calibration.json``, else ``<checkpoint>.calibration.json``.
+
+    Example:
+        >>> calibration_path(Path("weights/affnerf-small.pt")).name
+        'affnerf-small.calibration.json'
+    """
+    if out is not None:
+        return Path(out)
+    source = Path(source)
+    if source.is_dir():
+        return source / CALIBRATION_NAME
+    return source.with_suffix(f".{CALIBRATION_NAME}")
+
+
+def calibration_objects(ds: Dataset, split: str, max_objects: int) -> list[ObjectData]:
+    """The first ``max_objects`` objects of ``split`` taken round-robin over its categories.
+
+    Raises:
+        AffnerfError: naming ``dataset.json``, when the split has no objects.
+    """
+    entries = interleave_categories(ds.objects(split))[: max(max_objects, 0)]
+    if not entries:
+        raise input_error(ds.root / "dataset.json", f"no objects in split {split!r} to calibrate on")
+    return [ds.load_object(e) for e in entries]
+
+
+def input_views(obj: ObjectData, count: int, seed: int) -> list[int]:
+    """The protocol's seeded input views of ``obj`` (:func:`affnerf.eval.protocol.choose_views`, as in Table 2)."""
+    return choose_views(len(obj), obj.record.object_id, ProtocolConfig(input_views=count, target_views=0, seed=seed))[0]
+
+
+def object_grid(method: ConditionedNeRFMethod, obj: ObjectData, inputs: list[int]) -> tuple[np.ndarray, PointFn]:
+    """The fine field's density of ``obj`` encoded from ``inputs``, on a (R, R, R) grid of the model's scene cube
+    (evaluated in the encoding's occupied cells only), and its (N, 3) -> (N,) label function."""
+    model = method.loaded.model
+    encoding, grid = method.encoded(obj, inputs), method.occupancy(obj, inputs)
+    density, labels = model.point_fields(encoding)
+    volume = evaluate_grid(density, method.mesh_resolution, model.config.scene_half_extent, occupancy=grid)
+    return volume, labels
+
+
+@torch.no_grad()
+def sweep_grid(
+    volume: np.ndarray,
+    labels: PointFn,
+    levels: tuple[float, ...],
+    half_extent: float,
+    truth: SurfaceSamples,
+    seed: list[int],
+) -> list[SurfaceScore]:
+    """One object's 3D scores (``SURFACE_KEYS``) of the mesh at each level of an evaluated (R, R, R) grid."""
+    scores = []
+    for level in levels:
+        mesh = labelled_mesh_from_grid(volume, labels, level, half_extent)
+        scores.append(score_mesh(mesh, truth, seed))
+    return scores  # type: ignore[return-value]
+
+
+def _mean(values: list[float | None]) -> float | None:
+    finite = [v for v in values if v is not None and math.isfinite(v)]
+    return float(np.mean(finite)) if finite else None
+
+
+def summarise_levels(levels: tuple[float, ...], scores: list[list[SurfaceScore]]) -> list[dict[str, Any]]:
+    """Per level, the 3D metrics averaged over objects (Chamfer over the non-empty meshes; None when all are
+    empty) and the number of empty meshes. ``scores[i][j]``: object i at level j.
+
+    Example:
+        >>> rows = summarise_levels((10.0, 50.0), [[{"chamfer_l1": 0.01, "fscore_1cm": 0.6,
+        ...     "affordance_miou_3d": 0.5}, {"chamfer_l1": None, "fscore_1cm": 0.0, "affordance_miou_3d": 0.0}]])
+        >>> [(r["level"], r["fscore_1cm"], r["meshes_empty"]) for r in rows]
+        [(10.0, 0.6, 0), (50.0, 0.0, 1)]
+    """
+    rows = []
+    for j, level in enumerate(levels):
+        at_level = [s[j] for s in scores]
+        row: dict[str, Any] = {"level": float(level)}
+        for key in SURFACE_KEYS:
+            values = [s[key] for s in at_level]
+            row[key] = _mean(values) if key == "chamfer_l1" else float(np.mean([v or 0.0 for v in values]))
+        row["meshes_empty"] = sum(s["chamfer_l1"] is None for s in at_level)
+        rows.append(row)
+    return rows
+
+
+def choose_level(rows: list[dict[str, Any]], previous: float) -> float:
+    """The level with the highest mean F-score; ties: the higher 3D mIoU, then the level closest to ``previous``.
+
+    Example:
+        >>> rows = [{"level": 20.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3},
+        ...         {"level": 75.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3},
+        ...         {"level": 200.0, "fscore_1cm": 0.1, "affordance_miou_3d": 0.9}]
+        >>> choose_level(rows, 50.0)
+        75.0
+    """
+    best = max(
+        rows,
+        key=lambda r: (round(r["fscore_1cm"], 9), round(r["affordance_miou_3d"], 9), -abs(r["level"] - previous)),
+    )
+    return float(best["level"])
+
+
+def store_surface_density(path: Path, level: float) -> None:
+    """Set ``surface_density`` of the model config stored in the checkpoint at ``path`` to ``level``, in place and
+    atomically (temporary file + rename); every other entry is kept."""
+    data = load_checkpoint(path)
+    if not isinstance(data.get("model_config"), dict):
+        raise input_error(path, "checkpoint has no model config")
+    data["model_config"] = {**data["model_config"], "surface_density": float(level)}
+    atomic_write(Path(path), lambda f: torch.save(data, f))
+
+
+def check_config(config: CalibrateConfig) -> None:
+    """Refuse settings that cannot give a sweep (no levels, a level ≤ 0, too coarse a grid, no objects)."""
+    if not config.levels or any(not (math.isfinite(v) and v > 0) for v in config.levels):
+        raise AffnerfError(f"--levels must be positive densities per metre, got {list(config.levels)}")
+    if config.resolution < 2 or config.max_objects < 1 or config.input_views < 1:
+        raise AffnerfError("--resolution must be at least 2, --max-objects and --input-views at least 1")
+
+
+def _load(source: Path, ds: Dataset, device: str) -> LoadedModel:
+    """The model to calibrate, checked to have the dataset's affordance classes."""
+    loaded = load_model(source, pick_device(device))
+    if loaded.classes != ds.affordance_classes:
+        raise input_error(loaded.path, f"trained with other affordance classes than {ds.root / 'dataset.json'}")
+    return loaded
+
+
+def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
+    """Sweep the levels, write ``calibration.json`` and (unless ``dry_run``) store the chosen level in the
+    checkpoint; returns what was written."""
+    check_config(config)
+    source = model_source(config)
+    resolve_checkpoint(source)  # a missing run fails before the dataset is read
+    ds = Dataset.open(config.data)
+    loaded = _load(source, ds, config.device)
+    objects = calibration_objects(ds, config.split, config.max_objects)
+    method = ConditionedNeRFMethod(loaded, mesh_resolution=config.resolution)
+    half_extent = loaded.model.config.scene_half_extent
+    scores, views = [], {}
+    for obj in objects:
+        inputs = input_views(obj, config.input_views, config.seed)
+        volume, labels = object_grid(method, obj, inputs)
+        truth = true_samples(obj, config.seed)
+        seed = sample_seed(config.seed, obj.record.object_id)
+        scores.append(sweep_grid(volume, labels, tuple(config.levels), half_extent, truth, seed))
+        views[obj.record.object_id] = inputs
+    previous = float(loaded.model.config.surface_density)
+    rows = summarise_levels(tuple(config.levels), scores)
+    chosen = choose_level(rows, previous)
+    result = {
+        "checkpoint": str(loaded.path),
+        "split": config.split,
+        "resolution": config.resolution,
+        "levels": rows,
+        "objects": views,
+        "previous_level": previous,
+        "chosen_level": chosen,
+        "stored": not config.dry_run,
+    }
+    write_json_atomic(calibration_path(source, config.out), result)
+    if not config.dry_run:
+        store_surface_density(loaded.path, chosen)
+    return result
+
+
+def sweep_lines(result: dict[str, Any]) -> list[str]:
+    """What ``affnerf eval calibrate`` prints: one line per level, then the chosen level."""
+    lines = []
+    for row in result["levels"]:
+        chamfer = "-" if row["chamfer_l1"] is None else f"{row['chamfer_l1']:.4f}"
+        lines.append(
+            f"level {row['level']:g}/m: F@1cm {row['fscore_1cm']:.3f}  Chamfer {chamfer}  "
+            f"3D mIoU {row['affordance_miou_3d']:.3f}  (empty {row['meshes_empty']}/{len(result['objects'])})"
+        )
+    where = f"stored in {result['checkpoint']}" if result["stored"] else "dry run: checkpoint unchanged"
+    lines.append(f"chosen level {result['chosen_level']:g}/m (was {result['previous_level']:g}/m; {where})")
+    return lines
