@@ -51,6 +51,7 @@ def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
         "toy",
         np.zeros((2, 5, 7, 3), np.uint8),
         labels,
+        np.zeros((2, 5, 7), np.float16),
         np.zeros((2, 4, 4, 3), np.uint8),
         np.zeros((2, 4)),
         np.array([0, 0, 1]),

@@ -42,6 +42,9 @@ class ModelConfig:
         surface_density: density (per metre) of the surface that mesh extraction puts at the object's boundary;
             predict, eval and the viewer use this value unless told otherwise. 50/m: a 1 cm slab at this density
             stops about 40 % of the light.
+        conditioning: how the trunk takes its per-point conditioning (the shape code, or PixelNeRF-M's features):
+            ``concat`` joins it to PE(position) at the input and at the skip (the paper), ``film`` also scales and
+            shifts every trunk layer's pre-activation by it (FiLM, as Occupancy Networks' CBN decoder).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -64,6 +67,7 @@ class ModelConfig:
     scene_half_extent: float = CANONICAL_HALF_EXTENT
     surface_density: float = 50.0
     occupancy_density: float = 5.0
+    conditioning: Literal["concat", "film"] = "concat"
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint

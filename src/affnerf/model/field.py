@@ -44,6 +44,9 @@ class ConditionalField(nn.Module):
         pe_xyz: positional-encoding frequencies of positions.
         pe_dir: positional-encoding frequencies of view directions.
         color_code_dim: size of the conditioning the colour head takes (default: ``code_dim``).
+        film: also modulate every trunk layer by the code (FiLM: ``relu(W h * (1 + gamma) + beta)``, gamma and beta
+            linear in the code, as Occupancy Networks' conditional-normalisation decoder); the modulation starts
+            at zero, so a fresh FiLM field computes what the concatenating one does.
     """
 
     def __init__(
@@ -57,6 +60,7 @@ class ConditionalField(nn.Module):
         pe_xyz: int = 10,
         pe_dir: int = 4,
         color_code_dim: int | None = None,
+        film: bool = False,
     ) -> None:
         super().__init__()
         color_code_dim = code_dim if color_code_dim is None else color_code_dim
@@ -68,6 +72,12 @@ class ConditionalField(nn.Module):
             d_in = in_dim if i == 0 else width + (in_dim if i == self.skip else 0)
             layers.append(nn.Linear(d_in, width))
         self.trunk_layers = nn.ModuleList(layers)
+        self.width = width
+        self.film: nn.Linear | None = None
+        if film:
+            self.film = nn.Linear(code_dim, 2 * width * depth)
+            nn.init.zeros_(self.film.weight)
+            nn.init.zeros_(self.film.bias)
         self.density = nn.Linear(width, 1)
         self.feature = nn.Linear(width, width)
         self.affordance = nn.Sequential(
@@ -82,11 +92,17 @@ class ConditionalField(nn.Module):
     def trunk(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:
         """(N, width) trunk features of (N, 3) points under (N, code_dim) shape codes."""
         x_in = torch.cat([positional_encoding(points, self.pe_xyz), shape_code], dim=-1)
+        mods = None
+        if self.film is not None:  # (N, depth, 2, width): each layer's gamma and beta
+            mods = self.film(shape_code).reshape(len(points), len(self.trunk_layers), 2, self.width)
         h = x_in
         for i, layer in enumerate(self.trunk_layers):
             if i == self.skip:
                 h = torch.cat([h, x_in], dim=-1)
-            h = torch.relu(layer(h))
+            h = layer(h)
+            if mods is not None:
+                h = h * (1.0 + mods[:, i, 0]) + mods[:, i, 1]
+            h = torch.relu(h)
         return h
 
     def density_from(self, h: torch.Tensor) -> torch.Tensor:

@@ -102,6 +102,7 @@ class FieldRenderer(nn.Module):
                 config.pe_xyz,
                 config.pe_dir,
                 color_code_dim=color_cond_dim,
+                film=config.conditioning == "film",
             )
 
         self.coarse = field()

@@ -1,6 +1,7 @@
 """Training frames as uint8 memory maps: decoded once at the training resolution, never held as float tensors.
 
-For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W) affordance ids, ``crops.npy``
+For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W) affordance ids, ``depth.npy``
+(N, H, W) float16 z-depth in metres (0 = no surface), ``crops.npy``
 (N, S, S, 3) encoder crops, the object's pixels of every frame (``fg_pixels.npy``, flat indices, frame i's
 between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the
 source ``transforms.json``, so a regenerated object is decoded again). With 3D supervision on, a folder
@@ -40,6 +41,7 @@ class ObjectFrames:
         object_id: the dataset id.
         rgb: (N, H, W, 3) uint8.
         labels: (N, H, W) uint8 affordance ids.
+        depth: (N, H, W) float16 z-depth in metres, 0 where no surface (nearest-resized like the labels).
         crops: (N, S, S, 3) uint8 encoder crops.
         crop_intrinsics: (N, 4) fl_x, fl_y, cx, cy of each crop (for pixel-aligned baselines).
         fg_offsets: (N + 1,) start of each frame's object pixels in ``fg_pixels``.
@@ -52,6 +54,7 @@ class ObjectFrames:
     object_id: str
     rgb: np.ndarray
     labels: np.ndarray
+    depth: np.ndarray
     crops: np.ndarray
     crop_intrinsics: np.ndarray
     fg_offsets: np.ndarray
@@ -65,7 +68,7 @@ class ObjectFrames:
 
 
 #: Bumped when the cache's layout changes, so older caches are rebuilt.
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 
 
 def _signature(obj: ObjectData, scale: float, crop: int) -> str:
@@ -99,6 +102,7 @@ def frames_from_arrays(
         object_id,
         rgb,
         labels,
+        np.zeros(labels.shape, np.float16),
         np.zeros((n, 1, 1, 3), np.uint8),
         np.zeros((n, 4)),
         offsets,
@@ -140,6 +144,7 @@ def _write_frames(obj: ObjectData, tmp: Path, scale: float, crop_size: int) -> N
     n = len(obj)
     rgb = np.lib.format.open_memmap(tmp / "rgb.npy", "w+", np.uint8, (n, size[1], size[0], 3))
     labels = np.lib.format.open_memmap(tmp / "labels.npy", "w+", np.uint8, (n, size[1], size[0]))
+    depth = np.lib.format.open_memmap(tmp / "depth.npy", "w+", np.float16, (n, size[1], size[0]))
     crops = np.lib.format.open_memmap(tmp / "crops.npy", "w+", np.uint8, (n, crop_size, crop_size, 3))
     background = obj.record.background_color
     full = obj.record.intrinsics
@@ -151,12 +156,13 @@ def _write_frames(obj: ObjectData, tmp: Path, scale: float, crop_size: int) -> N
         crop_k.append(crop_intrinsics(full.fl_x, full.fl_y, full.cx, full.cy, window, crop_size))
         rgb[i] = _resize(full_rgb, size, nearest=False)
         labels[i] = _resize(full_aff, size, nearest=True)
-    for array in (rgb, labels, crops):
+        depth[i] = _resize(obj.depth(i), size, nearest=True)
+    for array in (rgb, labels, depth, crops):
         array.flush()
     offsets, pixels = foreground_index(labels)
     np.save(tmp / "fg_offsets.npy", offsets)
     np.save(tmp / "fg_pixels.npy", pixels)
-    del rgb, labels, crops
+    del rgb, labels, depth, crops
     meta = {
         "signature": _signature(obj, scale, crop_size),
         "object_id": obj.record.object_id,
@@ -175,6 +181,7 @@ def load_frames(folder: Path) -> ObjectFrames:
         object_id=meta["object_id"],
         rgb=np.load(folder / "rgb.npy", mmap_mode="r"),
         labels=np.load(folder / "labels.npy", mmap_mode="r"),
+        depth=np.load(folder / "depth.npy", mmap_mode="r"),
         crops=np.load(folder / "crops.npy", mmap_mode="r"),
         crop_intrinsics=np.asarray(meta["crop_intrinsics"], np.float64),
         fg_offsets=np.load(folder / "fg_offsets.npy"),

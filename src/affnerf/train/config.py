@@ -50,6 +50,14 @@ class TrainConfig:
         rays_per_step: rays per step and per process.
         foreground_fraction: share of rays drawn on the object (the rest uniform over the image).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
+        affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
+            frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
+            square root of inverse frequency, so thin parts such as blades and handles count more).
+        mask_weight: weight of the BCE between each rendered ray's opacity and the object mask (0 = off, the paper).
+        depth_weight: weight of the L1 between each object ray's rendered and true z-depth in metres (0 = off, the
+            paper); uses the dataset's depth maps.
+        input_jitter: strength of the random colour, framing, blur and noise changes to the encoders' crops
+            (:mod:`affnerf.train.augment`; 0 = off, the paper; 1 = the documented ranges).
         points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
             paper's loss; conventions §4): occupancy BCE of both fields at ``points_per_object`` points per object,
             plus ``point_affordance_weight`` times their affordance cross-entropy.
@@ -88,6 +96,10 @@ class TrainConfig:
     rays_per_step: int = 1024
     foreground_fraction: float = 0.5
     affordance_weight: float = 4e-4
+    affordance_balance: float = 0.0
+    mask_weight: float = 0.0
+    depth_weight: float = 0.0
+    input_jitter: float = 0.0
     points_weight: float = 0.0
     points_per_object: int = 1024
     point_affordance_weight: float = 1.0

@@ -1,5 +1,7 @@
-"""The training loss: L = MSE(coarse) + MSE(fine) + lambda * (CE(coarse) + CE(fine)) (the paper's eq. 6-8), and the
-optional 3D supervision of both fields at points with known occupancy and affordance (:func:`point_loss`)."""
+"""The training loss: L = MSE(coarse) + MSE(fine) + lambda * (CE(coarse) + CE(fine)) (the paper's eq. 6-8), and
+the optional terms beyond the paper: class-balanced CE (:func:`class_weights`), mask and depth losses on the
+rendered rays (:func:`ray_geometry_loss`) and 3D supervision of both fields at points with known occupancy and
+affordance (:func:`point_loss`)."""
 
 from __future__ import annotations
 
@@ -11,15 +13,36 @@ import torch
 from affnerf.model.raymarch import RayOutputs
 
 
-def affordance_nll(probs: torch.Tensor, labels: torch.Tensor, eps: float = 1e-7) -> torch.Tensor:
-    """Mean cross-entropy of rendered class distributions (R, C) against labels (R,).
+def class_weights(counts: torch.Tensor, power: float) -> torch.Tensor:
+    """(C,) class weights proportional to frequency^-power from (C,) pixel counts, scaled so that the weighted
+    mean over the counted pixels is 1; classes never seen get weight 0. power 0 gives plain cross-entropy, 0.5
+    the square root of inverse frequency (thin parts count more without letting one pixel dominate).
+
+    Example:
+        >>> [round(w, 3) for w in class_weights(torch.tensor([900.0, 100.0, 0.0]), 0.5).tolist()]
+        [0.833, 2.5, 0.0]
+    """
+    counts = counts.double()
+    freq = counts / counts.sum().clamp(min=1.0)
+    raw = torch.where(counts > 0, freq.clamp(min=1e-12) ** -power, torch.zeros_like(freq))
+    return (raw / (raw * freq).sum().clamp(min=1e-12)).float()
+
+
+def affordance_nll(
+    probs: torch.Tensor, labels: torch.Tensor, eps: float = 1e-7, weight: torch.Tensor | None = None
+) -> torch.Tensor:
+    """Mean cross-entropy of rendered class distributions (R, C) against labels (R,); with (C,) class weights, the
+    weighted mean (sum of w[label] * nll over the sum of w[label]).
 
     Example:
         >>> round(affordance_nll(torch.tensor([[0.5, 0.5], [1.0, 0.0]]), torch.tensor([1, 0])).item(), 4)
         0.3466
     """
-    picked = probs.gather(1, labels[:, None])[:, 0]
-    return -torch.log(picked.clamp(min=eps)).mean()
+    nll = -torch.log(probs.gather(1, labels[:, None])[:, 0].clamp(min=eps))
+    if weight is None:
+        return nll.mean()
+    w = weight[labels]
+    return (w * nll).sum() / w.sum().clamp(min=eps)
 
 
 @dataclass
@@ -34,17 +57,69 @@ class LossTerms:
 
 
 def nerf_loss(
-    coarse: RayOutputs, fine: RayOutputs | None, rgb: torch.Tensor, labels: torch.Tensor, weight: float
+    coarse: RayOutputs,
+    fine: RayOutputs | None,
+    rgb: torch.Tensor,
+    labels: torch.Tensor,
+    weight: float,
+    class_weight: torch.Tensor | None = None,
 ) -> LossTerms:
-    """Photometric MSE plus ``weight`` times affordance cross-entropy, over the coarse and fine renders."""
+    """Photometric MSE plus ``weight`` times affordance cross-entropy (class-weighted when given), over the coarse
+    and fine renders."""
     mse_c = torch.mean((coarse.rgb - rgb) ** 2)
-    ce_c = affordance_nll(coarse.affordance, labels)
+    ce_c = affordance_nll(coarse.affordance, labels, weight=class_weight)
     if fine is None:
         zero = torch.zeros((), device=rgb.device)
         return LossTerms(mse_c + weight * ce_c, mse_c, zero, ce_c, zero)
     mse_f = torch.mean((fine.rgb - rgb) ** 2)
-    ce_f = affordance_nll(fine.affordance, labels)
+    ce_f = affordance_nll(fine.affordance, labels, weight=class_weight)
     return LossTerms(mse_c + mse_f + weight * (ce_c + ce_f), mse_c, mse_f, ce_c, ce_f)
+
+
+def mask_bce(opacity: torch.Tensor, on_object: torch.Tensor, eps: float = 1e-5) -> torch.Tensor:
+    """Mean binary cross-entropy of (R,) rendered opacities against (R,) bool object masks.
+
+    Example:
+        >>> round(mask_bce(torch.tensor([0.5, 0.5]), torch.tensor([True, False])).item(), 4)
+        0.6931
+    """
+    o = opacity.clamp(eps, 1.0 - eps)
+    return -torch.where(on_object, torch.log(o), torch.log1p(-o)).mean()
+
+
+def depth_l1(depth: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """Mean |rendered - true| z-depth (m) over the rays that meet a surface (target > 0); (R,) each. The rendered
+    depth is the weights' sum of sample depths, so a ray that stays transparent is pulled towards opacity too.
+
+    Example:
+        >>> round(depth_l1(torch.tensor([0.5, 0.2, 0.0]), torch.tensor([0.4, 0.0, 0.1])).item(), 4)
+        0.1
+    """
+    hit = target > 0
+    if not bool(hit.any()):
+        return depth.sum() * 0.0
+    return (depth[hit] - target[hit]).abs().mean()
+
+
+@dataclass
+class RayGeometryTerms:
+    """Mask and depth losses of the rendered rays: ``total`` is weighted and summed over the stages; ``mask`` and
+    ``depth`` are the finest stage's (logged)."""
+
+    total: torch.Tensor
+    mask: torch.Tensor
+    depth: torch.Tensor
+
+
+def ray_geometry_loss(
+    stages: list[RayOutputs], labels: torch.Tensor, depth: torch.Tensor, mask_weight: float, depth_weight: float
+) -> RayGeometryTerms:
+    """mask_weight * BCE(opacity, label > 0) + depth_weight * L1 depth over each stage (coarse, then fine), with
+    (R,) label and z-depth targets (DS-NeRF and pixelNeRF-style geometry cues the dataset provides)."""
+    masks = [mask_bce(s.opacity, labels > 0) for s in stages]
+    depths = [depth_l1(s.depth, depth) for s in stages]
+    total = mask_weight * torch.stack(masks).sum() + depth_weight * torch.stack(depths).sum()
+    return RayGeometryTerms(total, masks[-1], depths[-1])
 
 
 def occupancy_slab(surface_density: float) -> float:
@@ -83,7 +158,9 @@ def occupancy_bce(density: torch.Tensor, occupancy: torch.Tensor, slab: float, e
     return (target * inside + (1.0 - target) * x).mean()
 
 
-def point_affordance_ce(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+def point_affordance_ce(
+    logits: torch.Tensor, labels: torch.Tensor, class_weight: torch.Tensor | None = None
+) -> torch.Tensor:
     """Mean cross-entropy of (P, C - 1) object-class logits against (P,) affordance ids; id 0 means no target
     (the field predicts classes 1 to C - 1), and no point with a target gives 0.
 
@@ -94,7 +171,8 @@ def point_affordance_ce(logits: torch.Tensor, labels: torch.Tensor) -> torch.Ten
     keep = labels > 0
     if not bool(keep.any()):
         return logits.sum() * 0.0
-    return torch.nn.functional.cross_entropy(logits[keep], labels[keep] - 1)
+    weight = None if class_weight is None else class_weight[1:]
+    return torch.nn.functional.cross_entropy(logits[keep], labels[keep] - 1, weight=weight)
 
 
 @dataclass
@@ -121,9 +199,11 @@ def point_loss(
     slab: float,
     weight: float,
     affordance_weight: float,
+    class_weight: torch.Tensor | None = None,
 ) -> PointTerms:
-    """3D supervision of each field's (P,) density and (P, C - 1) logits against (P,) occupancy and labels."""
+    """3D supervision of each field's (P,) density and (P, C - 1) logits against (P,) occupancy and labels (the
+    affordance CE weighted by the (C,) class weights when given)."""
     occ = [occupancy_bce(density, occupancy, slab) for density, _ in fields]
-    ce = [point_affordance_ce(logits, labels) for _, logits in fields]
+    ce = [point_affordance_ce(logits, labels, class_weight) for _, logits in fields]
     occ_sum, ce_sum = torch.stack(occ).sum(), torch.stack(ce).sum()
     return PointTerms(weight * (occ_sum + affordance_weight * ce_sum), occ_sum, ce_sum, occ[-1], ce[-1])

@@ -34,6 +34,7 @@ class RayBatch:
         dirs: (R, 3) ray directions (unit length along the camera axis).
         rgb: (R, 3) target colours in [0, 1].
         labels: (R,) target affordance ids.
+        depth: (R,) target z-depth in metres (0 = the ray meets no surface).
         background: (R, 3) background colour behind each ray.
         encoder_view: (B, V) frame indices of each object's encoded views.
         ray_view: (R,) frame index each ray comes from.
@@ -48,6 +49,7 @@ class RayBatch:
     dirs: torch.Tensor
     rgb: torch.Tensor
     labels: torch.Tensor
+    depth: torch.Tensor
     background: torch.Tensor
     encoder_view: torch.Tensor
     ray_view: torch.Tensor
@@ -183,7 +185,7 @@ class RaySampler:
 
 
 def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
-    ray_object, pix, views, poses, intr, rgb, labels, bg = [], [], [], [], [], [], [], []
+    ray_object, pix, views, poses, intr, rgb, labels, depth, bg = [], [], [], [], [], [], [], [], []
     for slot, obj, view, u, v in parts:
         n = len(view)
         ray_object.append(np.full(n, slot))
@@ -193,6 +195,7 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         intr.append(np.broadcast_to(obj.intrinsics, (n, 4)))
         rgb.append(obj.rgb[view, v, u])
         labels.append(obj.labels[view, v, u])
+        depth.append(obj.depth[view, v, u])
         bg.append(np.broadcast_to(obj.background, (n, 3)))
     origins, dirs = pixel_rays(
         torch.from_numpy(np.concatenate(pix)),
@@ -208,6 +211,7 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         dirs=dirs.float(),
         rgb=torch.from_numpy(np.concatenate(rgb)).float() / 255.0,
         labels=torch.from_numpy(np.concatenate(labels)).long(),
+        depth=torch.from_numpy(np.concatenate(depth)).float(),
         background=torch.from_numpy(np.concatenate(bg)).float(),
         encoder_view=torch.from_numpy(np.stack(enc_views)).long(),
         ray_view=torch.from_numpy(np.concatenate(views)).long(),

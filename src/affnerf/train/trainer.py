@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import torch
 from torch.nn.parallel import DistributedDataParallel
 from tqdm import tqdm
@@ -29,11 +30,12 @@ from affnerf.model.base import ConditionedNeRF
 from affnerf.model.raymarch import RayOutputs
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
+from affnerf.train.augment import jitter_crops
 from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
 from affnerf.train.config import TrainConfig
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
-from affnerf.train.loss import nerf_loss, occupancy_slab, point_loss
+from affnerf.train.loss import class_weights, nerf_loss, occupancy_slab, point_loss, ray_geometry_loss
 from affnerf.train.points import PointSet
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.state import TrainingState, params_checksum, prepare_run_folder
@@ -93,6 +95,21 @@ def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> l
         cached_frames(ds.load_object(entry), cache, config.image_scale, crop)
     dist_utils.barrier(ctx)
     return [cached_frames(ds.load_object(e), cache, config.image_scale, crop) for e in entries]
+
+
+def label_counts(frames: list[ObjectFrames], num_classes: int) -> torch.Tensor:
+    """(C,) pixels of each affordance class over every training frame (background included)."""
+    counts = torch.zeros(num_classes, dtype=torch.float64)
+    for f in frames:
+        counts += torch.from_numpy(np.bincount(np.asarray(f.labels).reshape(-1), minlength=num_classes)[:num_classes])
+    return counts
+
+
+def object_backgrounds(batch: RayBatch) -> torch.Tensor:
+    """(B, 3) background colour of each of the batch's objects (read off its rays)."""
+    bg = torch.ones(batch.images.shape[0], 3, dtype=batch.background.dtype, device=batch.background.device)
+    bg[batch.ray_object] = batch.background
+    return bg
 
 
 def _cache_dir(config: TrainConfig) -> Path:
@@ -172,6 +189,7 @@ class Trainer:
         self.step = 0
         self.end = min(config.steps, config.stop_at) if config.stop_at > 0 else config.steps
         self.scalars: dict[str, float] = {}
+        self.class_weight: torch.Tensor | None = None
 
     def setup(self) -> None:
         """Open the dataset, prepare the run folder, cache the training frames (and, with ``points_weight`` > 0,
@@ -181,7 +199,11 @@ class Trainer:
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
-        self.state = self._build_state(_load_frames(config, self.dataset, ctx))
+        frames = _load_frames(config, self.dataset, ctx)
+        self.state = self._build_state(frames)
+        if config.affordance_balance > 0:
+            counts = label_counts(frames, len(self.dataset.affordance_classes))
+            self.class_weight = class_weights(counts, config.affordance_balance).to(ctx.device)
         if config.points_weight > 0:
             points = _load_points(config, self.dataset, ctx)
             self.state.points = PointSampler(points, config.points_per_object, config.seed, ctx.rank)
@@ -258,6 +280,11 @@ class Trainer:
         for group in state.optimizer.param_groups:
             group["lr"] = lr
         batch = state.sampler.next_batch().to(self.ctx.device)
+        if config.input_jitter > 0:
+            images, intrinsics = jitter_crops(
+                batch.images, batch.input_intrinsics, object_backgrounds(batch), config.input_jitter, state.generator
+            )
+            batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
         points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
         total, outputs = self._loss(batch, points)
         state.optimizer.zero_grad(set_to_none=True)
@@ -271,22 +298,34 @@ class Trainer:
         """The step's total loss and its detached parts (see :meth:`train_iteration`)."""
         config = self.config
         coarse, fine, geometry = self.net(batch, self.state.generator, points)
-        terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight)
+        terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
         parts = {
             "loss/mse": (terms.mse_fine if fine is not None else terms.mse_coarse).detach(),
             "loss/affordance_ce": (terms.ce_fine if fine is not None else terms.ce_coarse).detach(),
             "train/affordance_accuracy": (final.affordance.detach().argmax(-1) == batch.labels).float().mean(),
         }
+        total = terms.total
+        if config.mask_weight > 0 or config.depth_weight > 0:
+            stages = [coarse] if fine is None else [coarse, fine]
+            rays = ray_geometry_loss(stages, batch.labels, batch.depth, config.mask_weight, config.depth_weight)
+            parts["loss/mask"], parts["loss/depth"] = rays.mask.detach(), rays.depth.detach()
+            total = total + rays.total
         if points is None or geometry is None:
-            return terms.total, parts
+            return total, parts
         slab = occupancy_slab(config.model.surface_density)
         extra = point_loss(
-            geometry, points.occupancy, points.labels, slab, config.points_weight, config.point_affordance_weight
+            geometry,
+            points.occupancy,
+            points.labels,
+            slab,
+            config.points_weight,
+            config.point_affordance_weight,
+            self.class_weight,
         )
         parts["loss/occupancy"] = extra.occupancy_last.detach()
         parts["loss/point_affordance"] = extra.affordance_last.detach()
-        return terms.total + extra.total, parts
+        return total + extra.total, parts
 
     def after_iteration(self, outputs: IterationOutputs, out_of_time: bool) -> None:
         """Run every hook, in order, with the step just done, the iteration's outputs and the run's scalars."""
