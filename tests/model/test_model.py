@@ -132,3 +132,16 @@ def test_point_geometry_of_several_objects_matches_each_objects_own_field(kind):
         torch.testing.assert_close(fields[-1][0][mine], density(points[mine]))
         assert torch.equal(fields[-1][1][mine].argmax(-1) + 1, labels(points[mine]))
     assert not torch.allclose(fields[0][0], fields[1][0])  # the coarse field, then the fine one
+
+
+def test_a_fresh_film_field_equals_the_concatenating_one_and_film_lets_the_code_scale_every_layer():
+    torch.manual_seed(2)
+    plain = ConditionalField(num_classes=3, code_dim=8, width=32, depth=4)
+    film = ConditionalField(num_classes=3, code_dim=8, width=32, depth=4, film=True)
+    film.load_state_dict(plain.state_dict(), strict=False)  # same trunk and heads; the modulation starts at zero
+    pts, code = torch.rand(20, 3) - 0.5, torch.randn(20, 8)
+    torch.testing.assert_close(film.density_only(pts, code), plain.density_only(pts, code))
+    with torch.no_grad():
+        film.film.bias[:32] = 1.0  # gamma of the first layer: its pre-activation doubles
+    assert not torch.allclose(film.density_only(pts, code), plain.density_only(pts, code))
+    assert film.film.out_features == 2 * 32 * 4
