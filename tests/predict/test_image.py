@@ -86,11 +86,11 @@ def _gradient(width=120, height=90):
 
 
 @pytest.mark.parametrize("kind", ["noise", "gradient"])
-def test_an_image_without_separable_object_is_doubtful_with_one_warning(tmp_path, caplog, kind):
+def test_an_image_without_uniform_background_is_doubtful_by_its_border_with_one_warning(tmp_path, caplog, kind):
     rgb = _noise() if kind == "noise" else _gradient()
     path = _save(tmp_path, f"{kind}.png", Image.fromarray(rgb))
     with caplog.at_level(logging.WARNING, logger="affnerf"):
-        prepared = prepare_image(path, 32)
+        prepared = prepare_image(path, 32, segment="uniform")
     sep = prepared.separation
     assert sep.source == "uniform background" and not sep.confident
     assert sep.background_uniformity < MIN_BACKGROUND_UNIFORMITY and sep.border_contact > MAX_BORDER_CONTACT
@@ -122,3 +122,38 @@ def test_a_blank_frame_is_an_error_saying_what_to_give(tmp_path):
     empty = _save(tmp_path, "empty_mask.png", Image.new("L", (120, 90), 0))
     with pytest.raises(AffnerfError, match=r"empty_mask\.png: no object found \(the mask is empty\); give a mask"):
         prepare_image(_save(tmp_path, "p.png", Image.fromarray(_photo())), 32, mask=empty)
+
+
+def test_segment_none_takes_the_whole_image_and_is_never_doubted(tmp_path, caplog):
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        prepared = prepare_image(_save(tmp_path, "n.png", Image.fromarray(_noise())), 32, segment="none")
+    assert prepared.source == "whole image" and prepared.mask.all() and prepared.bbox == (0, 0, 120, 90)
+    assert prepared.separation.confident and not caplog.records
+
+
+def test_a_mask_file_overrides_the_segment_method_and_alpha_is_used_by_auto_only(tmp_path):
+    rgb = _photo()
+    mask = np.zeros((90, 120), np.uint8)
+    mask[10:20, 10:30] = 255
+    masked = prepare_image(_save(tmp_path, "p.png", Image.fromarray(rgb)), 32, mask=_save(tmp_path, "m.png",
+                           Image.fromarray(mask)), segment="none")  # fmt: skip
+    assert masked.source == "mask" and masked.bbox == (10, 10, 30, 20)
+    alpha = np.zeros((90, 120), np.uint8)
+    alpha[0:10, 0:10] = 255
+    rgba = _save(tmp_path, "a.png", Image.fromarray(np.dstack([rgb, alpha])))
+    assert prepare_image(rgba, 32).source == "alpha"
+    assert prepare_image(rgba, 32, segment="uniform").bbox == (70, 30, 100, 60)
+
+
+def test_two_methods_that_disagree_make_a_doubtful_separation():
+    from affnerf.predict.image import MIN_AGREEMENT, measure_separation
+    from affnerf.predict.segment import Segmentation
+
+    rgb, mask = _photo(), np.zeros((90, 120), bool)
+    mask[30:60, 70:100] = True
+    seg = Segmentation(mask, "salient", agreement=MIN_AGREEMENT - 0.1, compared_with="grabcut")
+    sep = measure_separation(rgb, mask, "salient", seg)
+    assert not sep.confident and sep.problems == ("two separation methods agree on only 70% (IoU) of the object",)
+    record = sep.to_json()
+    assert record["source"] == "salient" and record["agreement"] == 0.7 and record["compared_with"] == "grabcut"
+    assert record["background_uniformity"] is None and record["note"] is None

@@ -1,6 +1,7 @@
 """``affnerf predict``: everything a user gets from one photo, written to one folder.
 
-``input.png`` (the prepared crop), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
+``input.png`` (the prepared crop), ``mask.png`` (the object mask used, at the photo's size: white = object, to
+fix and pass back with ``--mask``), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
 ``affordance_model.ply`` (vertex colours and an integer vertex property ``affordance``),
 ``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, how confidently the object
 was separated from its background, the mesh or why there is none, the files written).
@@ -26,8 +27,10 @@ from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.pictures.compose import overlay_affordance
+from affnerf.predict.image import save_mask
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
+from affnerf.predict.segment import SegmentMethod
 
 logger = logging.getLogger(__name__)
 
@@ -40,7 +43,12 @@ class PredictConfig:
         image: the photo of the object (any size and mode).
         out: output folder.
         run: a run folder or checkpoint (default: the model shipped with affnerf).
-        mask: optional mask image (white or opaque = object).
+        mask: optional mask image (white or opaque = object), same size as the photo; it overrides ``segment``.
+        segment: how to separate the object from its background without ``mask``: ``auto`` (the image's alpha,
+            else a uniform background when the border is of one colour, else the salient-object model of the
+            optional extra ``affnerf[segment]``, falling back to GrabCut with a warning without it), ``salient``,
+            ``grabcut`` (OpenCV, from a centred rectangle), ``uniform`` (the border's colour) or ``none`` (the whole
+            image is the object). The mask used is written as ``mask.png``.
         views: turntable views.
         width: turntable image width.
         height: turntable image height.
@@ -59,6 +67,7 @@ class PredictConfig:
     out: Path
     run: Path | None = None
     mask: Path | None = None
+    segment: SegmentMethod = "auto"
     views: int = 12
     width: int = 200
     height: int = 150
@@ -114,7 +123,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     A model that predicts no surface gives no mesh: the other files are written, ``mesh`` is ``None`` with a
     ``mesh_note`` saying why, and a one-line warning names the checkpoint and the image.
     """
-    obj = predictor.encode_image(config.image, config.mask)
+    obj = predictor.encode_image(config.image, config.mask, config.segment)
     intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)
     frames = []
     for pose in turntable_poses(config.views, config.elevation, config.radius):
@@ -126,8 +135,9 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     out.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out))
     try:
-        files = ["input.png"]
+        files = ["input.png", "mask.png"]
         Image.fromarray(obj.prepared.crop).save(tmp / "input.png")
+        save_mask(tmp / "mask.png", obj.prepared.mask)
         (tmp / "turntable").mkdir()
         for i, frame in enumerate(frames):
             Image.fromarray(frame).save(tmp / "turntable" / f"{i:03d}.png")

@@ -4,7 +4,7 @@ Python use::
 
     from affnerf.predict.predictor import Predictor
     p = Predictor.load("runs/mini")                      # a run folder or a checkpoint
-    obj = p.encode_image("mug.png")                      # codes of the object in the photo
+    obj = p.encode_image("mug.png")                      # codes of the object in the photo (segment="auto")
     view = p.render(obj, intrinsics, c2w)                # RGB, depth, affordance at any camera
     mesh = p.mesh(obj, resolution=128)                   # LabelledMesh with per-vertex affordance
 """
@@ -27,6 +27,7 @@ from affnerf.model.views import RenderedView, render_view
 from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_mesh
+from affnerf.predict.segment import SegmentMethod
 from affnerf.rendering.grid import OccupancyGrid
 
 
@@ -117,10 +118,11 @@ class Predictor:
         images = torch.from_numpy(np.ascontiguousarray(crops)).permute(0, 3, 1, 2).float() / 255.0
         return self.loaded.model.encode(images.to(self.loaded.device))
 
-    def encode_image(self, image: Path, mask: Path | None = None) -> EncodedObject:
-        """Prepare a photo (separate, crop, centre, resize) and encode it."""
+    def encode_image(self, image: Path, mask: Path | None = None, segment: SegmentMethod = "auto") -> EncodedObject:
+        """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, crop, centre, resize) and
+        encode it."""
         size = self.loaded.model.config.encoder_resolution
-        prepared = prepare_image(Path(image), size, self.loaded.background, mask)
+        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
 
     def render(self, obj: EncodedObject, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:

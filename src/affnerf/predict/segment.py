@@ -1,0 +1,239 @@
+"""Separating the object of a photo from its background: the methods of ``affnerf predict --segment``.
+
+- ``uniform``: the object is what differs from the colour of the image border (a clean backdrop).
+- ``grabcut``: OpenCV's GrabCut, started from a centred rectangle (the object is assumed inside it).
+- ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
+- ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
+  the salient model; without the optional extra ``affnerf[segment]`` it falls back to GrabCut (OpenCV) or the
+  uniform estimate, with one warning line. When the salient model ran and OpenCV is there, GrabCut started from
+  the salient mask's trimap also runs, and the two masks' IoU is the ``agreement`` recorded with the separation.
+- ``none``: the whole image is the object.
+
+A given ``--mask`` and (for ``auto``) the image's alpha channel come first: see :func:`affnerf.predict.image.
+prepare_image`. OpenCV (``opencv-python-headless``) and onnxruntime are optional and imported only when used.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+from scipy import ndimage
+
+from affnerf.errors import AffnerfError
+from affnerf.predict.salient import INSTALL_HINT, SalientUnavailable, load_salient_model, salient_mask
+
+#: The separation methods of ``--segment``.
+SegmentMethod = Literal["auto", "salient", "grabcut", "uniform", "none"]
+SEGMENT_METHODS: tuple[str, ...] = get_args(SegmentMethod)
+#: Largest per-channel difference (0..1) from the background colour still counted as background.
+BACKGROUND_TOLERANCE = 0.06
+#: Width in pixels of the image border the background colour and the object's border contact are measured on.
+BORDER_WIDTH = 2
+#: Smallest share of the border within ``BACKGROUND_TOLERANCE`` of its colour for ``auto`` to take the background
+#: as uniform (an object touching the border lowers it; cluttered scenes are far below it).
+AUTO_UNIFORMITY = 0.9
+#: GrabCut: iterations, the rectangle's margin (share of each side left out as sure background), the largest image
+#: side it works at (larger photos are reduced, and the mask brought back).
+GRABCUT_ITERATIONS, GRABCUT_MARGIN, GRABCUT_MAX_SIDE = 5, 0.04, 400
+#: Half-width of the unsure band of a trimap made from a mask, as a share of the image's larger side.
+TRIMAP_BAND = 0.02
+#: Whether ``auto`` and ``salient`` use GrabCut's refinement of the salient mask instead of the mask itself
+#: (chosen on the composite benchmark; either way the refinement gives the agreement).
+REFINE_SALIENT = False
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class Segmentation:
+    """An object mask and how it was made.
+
+    Attributes:
+        mask: (H, W) bool object pixels.
+        source: ``uniform background``, ``grabcut``, ``salient`` or ``whole image``.
+        agreement: IoU of the masks of two methods, when two ran (``None`` otherwise).
+        compared_with: the second method (``None`` when one ran).
+        note: why ``auto`` did not use the salient model when it wanted to (``None`` otherwise).
+    """
+
+    mask: np.ndarray
+    source: str
+    agreement: float | None = None
+    compared_with: str | None = None
+    note: str | None = None
+
+
+def border_pixels(image: np.ndarray, width: int = BORDER_WIDTH) -> np.ndarray:
+    """(N, ...) the values of the image's outer ``width`` pixels (H, W, ...), the corners counted twice.
+
+    Example:
+        >>> border_pixels(np.arange(9).reshape(3, 3), 1).tolist()
+        [0, 1, 2, 6, 7, 8, 0, 3, 6, 2, 5, 8]
+    """
+    rest = image.shape[2:]
+    parts = [image[:width], image[-width:], image[:, :width], image[:, -width:]]
+    return np.concatenate([p.reshape(-1, *rest) for p in parts])
+
+
+def border_color(rgb: np.ndarray, width: int = BORDER_WIDTH) -> np.ndarray:
+    """(3,) median colour (0..1) of the image's outer ``width`` pixels: the background of a centred object."""
+    return np.median(border_pixels(rgb, width), axis=0) / 255.0
+
+
+def background_uniformity(rgb: np.ndarray, tolerance: float = BACKGROUND_TOLERANCE) -> float:
+    """Share of the (H, W, 3) uint8 image's border pixels within ``tolerance`` (per channel, 0..1) of the border
+    colour: 1 on a uniform backdrop, near 0 on noise or a gradient."""
+    border = border_pixels(rgb).astype(np.float64) / 255.0
+    return float((np.abs(border - border_color(rgb)).max(axis=-1) <= tolerance).mean())
+
+
+def uniform_background_mask(rgb: np.ndarray, tolerance: float = BACKGROUND_TOLERANCE) -> np.ndarray:
+    """(H, W) bool object mask of an image on a uniform background.
+
+    Pixels differing from the border colour by more than ``tolerance`` in some channel are object; specks of
+    a few pixels are removed, the object's own holes are kept (a pair of glasses is not a disc).
+    """
+    bg = border_color(rgb)
+    diff = np.abs(rgb.astype(np.float64) / 255.0 - bg).max(axis=-1)
+    mask = diff > tolerance
+    labels, count = ndimage.label(mask)
+    if count > 1:
+        sizes = ndimage.sum(mask, labels, index=np.arange(1, count + 1))
+        keep = np.flatnonzero(sizes >= max(4, 0.002 * sizes.max())) + 1
+        mask = np.isin(labels, keep)
+    return mask
+
+
+def largest_component(mask: np.ndarray) -> np.ndarray:
+    """The largest 8-connected component of an (H, W) bool mask (all False when it is empty).
+
+    Example:
+        >>> m = np.zeros((3, 6), bool); m[0, 0] = m[1, 3:6] = True
+        >>> largest_component(m).sum()
+        np.int64(3)
+    """
+    labels, count = ndimage.label(mask, structure=np.ones((3, 3)))
+    if count <= 1:
+        return mask.astype(bool)
+    sizes = ndimage.sum(mask, labels, index=np.arange(1, count + 1))
+    return labels == int(np.argmax(sizes)) + 1
+
+
+def mask_iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two bool masks (1 when both are empty).
+
+    Example:
+        >>> mask_iou(np.array([1, 1, 0], bool), np.array([0, 1, 1], bool))
+        0.3333333333333333
+    """
+    union = np.logical_or(a, b).sum()
+    return float(np.logical_and(a, b).sum() / union) if union else 1.0
+
+
+def opencv():
+    """The ``cv2`` module, or ``None`` when opencv-python-headless is not installed."""
+    try:
+        import cv2
+    except ImportError:
+        return None
+    return cv2
+
+
+def _grabcut_labels(rgb: np.ndarray, labels: np.ndarray | None) -> np.ndarray:
+    """Run GrabCut on the (H, W, 3) image, from ``labels`` (OpenCV's GC_* trimap, at the image size) or, when
+    ``None``, from the centred rectangle; returns the (H, W) bool object pixels."""
+    cv2 = opencv()
+    if cv2 is None:
+        raise AffnerfError(f"GrabCut needs OpenCV (opencv-python-headless), which is not installed: {INSTALL_HINT}")
+    h, w = rgb.shape[:2]
+    scale = min(1.0, GRABCUT_MAX_SIDE / max(h, w))
+    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    bgr = np.ascontiguousarray(cv2.resize(rgb, size, interpolation=cv2.INTER_AREA)[..., ::-1])
+    bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    if labels is None:
+        gc = np.zeros(bgr.shape[:2], np.uint8)
+        mx, my = max(1, round(GRABCUT_MARGIN * size[0])), max(1, round(GRABCUT_MARGIN * size[1]))
+        rect = (mx, my, size[0] - 2 * mx, size[1] - 2 * my)
+        cv2.grabCut(bgr, gc, rect, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_RECT)
+    else:
+        gc = np.ascontiguousarray(cv2.resize(labels, size, interpolation=cv2.INTER_NEAREST))
+        if (gc % 2 == 1).all() or (gc % 2 == 0).all():  # GC_FGD, GC_PR_FGD are odd: nothing to separate
+            return labels % 2 == 1
+        cv2.grabCut(bgr, gc, None, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_MASK)
+    obj = (gc % 2 == 1).astype(np.uint8)  # GC_FGD = 1, GC_PR_FGD = 3
+    return cv2.resize(obj, (w, h), interpolation=cv2.INTER_LINEAR if scale < 1 else cv2.INTER_NEAREST) > 0
+
+
+def grabcut_mask(rgb: np.ndarray) -> np.ndarray:
+    """(H, W) bool object pixels by GrabCut from a centred rectangle, largest component kept."""
+    return largest_component(_grabcut_labels(rgb, None))
+
+
+def trimap(mask: np.ndarray) -> np.ndarray:
+    """OpenCV GrabCut labels of a mask: sure object inside, sure background outside, and unsure (probably as the
+    mask says) in a band of ``TRIMAP_BAND`` of the image's larger side around the mask's edge."""
+    r = max(2, round(TRIMAP_BAND * max(mask.shape)))
+    disc = np.hypot(*np.mgrid[-r : r + 1, -r : r + 1]) <= r
+    inner = ndimage.binary_erosion(mask, disc)
+    outer = ndimage.binary_dilation(mask, disc)
+    labels = np.where(mask, 3, 2).astype(np.uint8)  # GC_PR_FGD, GC_PR_BGD
+    labels[inner], labels[~outer] = 1, 0  # GC_FGD, GC_BGD
+    return labels
+
+
+def refine_with_grabcut(rgb: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The mask's edges redrawn by GrabCut, started from its trimap; largest component kept."""
+    return largest_component(_grabcut_labels(rgb, trimap(mask)))
+
+
+def salient_segmentation(rgb: np.ndarray, model=None) -> Segmentation:
+    """The salient model's mask (largest component) and, with OpenCV, its agreement with GrabCut's refinement.
+
+    Raises:
+        SalientUnavailable: the optional extra is not installed (and ``model`` not given).
+    """
+    model = model if model is not None else load_salient_model()
+    mask = largest_component(salient_mask(model, rgb))
+    if opencv() is None or not mask.any():
+        return Segmentation(mask, "salient")
+    refined = refine_with_grabcut(rgb, mask)
+    return Segmentation(refined if REFINE_SALIENT else mask, "salient", mask_iou(mask, refined), "grabcut")
+
+
+def _fallback(rgb: np.ndarray, err: SalientUnavailable, name: str) -> Segmentation:
+    """``auto`` without the salient model: GrabCut when OpenCV is there, else the uniform estimate."""
+    use_grabcut = opencv() is not None
+    instead = "GrabCut" if use_grabcut else "the image border's colour (expect a poor mask on a cluttered photo)"
+    note = f"{err}; separated with {instead} instead"
+    logger.warning("%s: %s", name, note)
+    if use_grabcut:
+        return Segmentation(grabcut_mask(rgb), "grabcut", note=note)
+    return Segmentation(uniform_background_mask(rgb), "uniform background", note=note)
+
+
+def segment(rgb: np.ndarray, method: str = "auto", name: str = "image") -> Segmentation:
+    """Separate the object of an (H, W, 3) uint8 photo with ``method`` (one of :data:`SEGMENT_METHODS`).
+
+    ``name`` (the photo's path) starts the fallback warning of ``auto``.
+
+    Raises:
+        AffnerfError: an unknown method; ``salient`` without the optional extra, ``grabcut`` without OpenCV,
+            each naming what to install (exit code 2).
+    """
+    if method not in SEGMENT_METHODS:
+        raise AffnerfError(f"unknown separation method {method!r}: choose one of {', '.join(SEGMENT_METHODS)}")
+    if method == "none":
+        return Segmentation(np.ones(rgb.shape[:2], bool), "whole image")
+    if method == "uniform" or (method == "auto" and background_uniformity(rgb) >= AUTO_UNIFORMITY):
+        return Segmentation(uniform_background_mask(rgb), "uniform background")
+    if method == "grabcut":
+        return Segmentation(grabcut_mask(rgb), "grabcut")
+    try:
+        return salient_segmentation(rgb)
+    except SalientUnavailable as err:
+        if method == "salient":
+            raise
+        return _fallback(rgb, err, name)

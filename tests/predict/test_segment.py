@@ -1,0 +1,117 @@
+"""Separating the object of a cluttered photo: auto, salient, GrabCut, uniform, none, and the fallbacks."""
+
+from __future__ import annotations
+
+import logging
+import sys
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from affnerf.errors import AffnerfError
+from affnerf.predict import salient, segment
+
+
+def _composite(h=240, w=320, seed=0):
+    """A red shape (a disc with a bar) on a textured background of blurred noise and stripes, and its mask."""
+    rng = np.random.default_rng(seed)
+    noise = ndimage.gaussian_filter(rng.normal(size=(h, w, 3)), (3, 3, 0))
+    stripes = np.sin(np.arange(w)[None, :, None] / 5.0 + np.arange(h)[:, None, None] / 9.0)
+    bg = 120 + 60 * noise / noise.std() + 25 * stripes * np.array([1.0, 0.6, 0.3])
+    yy, xx = np.mgrid[:h, :w]
+    obj = ((yy - 120) / 70.0) ** 2 + ((xx - 170) / 55.0) ** 2 <= 1.0
+    obj |= (abs(yy - 120) < 12) & (xx > 60) & (xx < 170)
+    rgb = np.where(obj[..., None], np.array([210, 40, 30]), bg)
+    return np.clip(rgb, 0, 255).astype(np.uint8), obj
+
+
+def _has_extra() -> bool:
+    try:
+        salient.load_salient_model()
+    except AffnerfError:
+        return False
+    return segment.opencv() is not None
+
+
+needs_extra = pytest.mark.skipif(
+    not _has_extra(), reason="the optional extra affnerf[segment] (onnxruntime, U2-Net-p weights, OpenCV) is not "
+    "installed: make install installs it"
+)  # fmt: skip
+needs_opencv = pytest.mark.skipif(segment.opencv() is None, reason="opencv-python-headless is not installed")
+
+
+@pytest.fixture
+def no_salient_model(monkeypatch):
+    """onnxruntime made unimportable and the loaded-model cache emptied: the extra looks uninstalled."""
+    monkeypatch.setitem(sys.modules, "onnxruntime", None)
+    monkeypatch.setattr(salient, "_LOADED", {})
+
+
+@needs_extra
+def test_auto_separates_a_shape_on_a_textured_background_with_the_salient_model():
+    rgb, truth = _composite()
+    seg = segment.segment(rgb, "auto")
+    assert seg.source == "salient" and seg.note is None
+    assert segment.mask_iou(seg.mask, truth) > 0.8
+    assert seg.compared_with == "grabcut" and seg.agreement > 0.8  # two methods ran: their agreement is recorded
+
+
+@needs_opencv
+def test_grabcut_separates_the_same_composite():
+    rgb, truth = _composite()
+    seg = segment.segment(rgb, "grabcut")
+    assert seg.source == "grabcut" and segment.mask_iou(seg.mask, truth) > 0.8
+
+
+def test_uniform_and_none():
+    rgb = np.full((60, 80, 3), 250, np.uint8)
+    rgb[20:40, 30:50] = (10, 120, 200)
+    for method in ("uniform", "auto"):  # a clean backdrop: auto takes the uniform background, no model runs
+        seg = segment.segment(rgb, method)
+        assert seg.source == "uniform background" and seg.mask.sum() == 400 and seg.mask[20:40, 30:50].all()
+    whole = segment.segment(_composite()[0], "none")
+    assert whole.source == "whole image" and whole.mask.all()
+
+
+def test_an_unknown_method_is_an_error():
+    with pytest.raises(AffnerfError, match="unknown separation method 'magic': choose one of auto, salient"):
+        segment.segment(np.zeros((8, 8, 3), np.uint8), "magic")
+
+
+@needs_opencv
+def test_auto_without_the_model_falls_back_to_grabcut_with_one_warning(no_salient_model, caplog):
+    rgb, truth = _composite()
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        seg = segment.segment(rgb, "auto", "photo.jpg")
+    assert seg.source == "grabcut" and segment.mask_iou(seg.mask, truth) > 0.8
+    (record,) = caplog.records
+    message = record.getMessage()
+    assert message.startswith("photo.jpg: the salient-object model needs onnxruntime") and "\n" not in message
+    assert "pip install 'affnerf[segment]'" in message and "separated with GrabCut instead" in message
+    assert seg.note in message
+
+
+def test_auto_without_model_or_opencv_falls_back_to_the_border_colour(no_salient_model, monkeypatch, caplog):
+    monkeypatch.setitem(sys.modules, "cv2", None)
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        seg = segment.segment(_composite()[0], "auto", "photo.jpg")
+    assert seg.source == "uniform background" and len(caplog.records) == 1
+    assert "the image border's colour" in caplog.records[0].getMessage()
+
+
+def test_salient_without_the_model_is_an_error_naming_the_extra(no_salient_model):
+    with pytest.raises(
+        AffnerfError, match=r"needs onnxruntime, which is not installed: pip install 'affnerf\[segment\]'"
+    ):
+        segment.segment(_composite()[0], "salient")
+
+
+def test_largest_component_and_trimap():
+    mask = np.zeros((40, 40), bool)
+    mask[5:25, 5:25] = mask[30:33, 30:33] = True
+    big = segment.largest_component(mask)
+    assert big.sum() == 400 and not big[30:33, 30:33].any()
+    labels = segment.trimap(big)
+    assert labels[15, 15] == 1 and labels[0, 39] == 0  # sure object inside, sure background far away
+    assert set(np.unique(labels[5, 4:7])) == {2, 3}  # unsure on both sides of the edge
