@@ -33,7 +33,8 @@ U2NETP_SHA256 = "309c8469258dda742793dce0ebea8e6dd393174f89934733ecc8b14c76f4ddd
 INPUT_SIZE = 320
 #: ImageNet mean and standard deviation of RGB in 0..1, U²-Net's input normalisation.
 IMAGENET_MEAN, IMAGENET_STD = (0.485, 0.456, 0.406), (0.229, 0.224, 0.225)
-#: Saliency (0..1 after min-max normalisation) above which a pixel is object; chosen on the composite benchmark.
+#: Saliency (0..1 after min-max normalisation) above which a pixel is object. On the composite benchmark the mean
+#: mask IoU was 0.435, 0.465, 0.476, 0.483, 0.484, 0.483, 0.484 at 0.2, 0.3, ..., 0.8: 0.5 starts the plateau.
 SALIENT_THRESHOLD = 0.5
 #: onnxruntime threads of one session (intra-op); a prediction runs one image at a time.
 SESSION_THREADS = 2
