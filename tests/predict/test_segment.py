@@ -115,3 +115,22 @@ def test_largest_component_and_trimap():
     labels = segment.trimap(big)
     assert labels[15, 15] == 1 and labels[0, 39] == 0  # sure object inside, sure background far away
     assert set(np.unique(labels[5, 4:7])) == {2, 3}  # unsure on both sides of the edge
+
+
+class _WrongModel:
+    """A stand-in salient model that finds a blob in the top-left corner, not the object."""
+
+    def saliency(self, rgb):
+        sal = np.zeros(rgb.shape[:2], np.float32)
+        sal[10:50, 10:50] = 1.0
+        return sal
+
+
+@needs_opencv
+def test_when_the_salient_model_and_grabcut_disagree_auto_takes_grabcut_and_records_it():
+    rgb, truth = _composite()
+    kept = segment.salient_segmentation(rgb, model=_WrongModel())
+    assert kept.source == "salient" and kept.agreement < segment.MIN_AGREEMENT and kept.compared_with == "grabcut"
+    swapped = segment.salient_segmentation(rgb, model=_WrongModel(), use_grabcut_on_disagreement=True)
+    assert swapped.source == "grabcut" and swapped.compared_with == "salient" and swapped.agreement == kept.agreement
+    assert segment.mask_iou(swapped.mask, truth) > 0.8

@@ -28,7 +28,14 @@ from PIL import Image
 from affnerf.data.crop import crop_object, object_bbox
 from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
-from affnerf.predict.segment import Segmentation, SegmentMethod, background_uniformity, border_pixels, segment
+from affnerf.predict.segment import (
+    MIN_AGREEMENT,
+    Segmentation,
+    SegmentMethod,
+    background_uniformity,
+    border_pixels,
+    segment,
+)
 
 #: Smallest share of the image the object must cover.
 MIN_OBJECT_FRACTION = 0.0005
@@ -39,8 +46,6 @@ MIN_BACKGROUND_UNIFORMITY = 0.5
 MAX_OBJECT_FRACTION = 0.9
 #: Largest share of the image border an object separated with confidence touches.
 MAX_BORDER_CONTACT = 0.25
-#: Smallest IoU of two methods' masks (when two ran) for a confident separation.
-MIN_AGREEMENT = 0.8
 #: Separations never doubted: the user's own statement of the object.
 TRUSTED_SOURCES = ("mask", "whole image")
 
