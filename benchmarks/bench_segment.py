@@ -1,0 +1,235 @@
+"""Object separation on cluttered composites: mask IoU and time of each ``--segment`` method.
+
+Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
+random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
+shadow, and each method's mask is compared with the true one. Also measured: the salient model's threshold
+(a sweep over the same saliency maps) and GrabCut's refinement of the salient mask.
+
+Run::
+
+    affnerf data generate --out /tmp/seg/data --objects-per-category 10 --views 4 --seed 7
+    .venv/bin/python benchmarks/bench_segment.py --data /tmp/seg/data [--composites 48] [--checkpoint RUN]
+
+Writes ``benchmarks/results/segment_composites.json``. With ``--checkpoint`` (a run folder or checkpoint, or
+``shipped``), a ``Predictor`` also predicts each object from its composite and from its clean render, and the
+affordance mIoU at the object's other dataset views and the 3D F-score at 1 cm of both are reported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PIL import Image, ImageFilter
+
+from affnerf.bench.environment import describe_machine
+from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.predict import salient, segment
+
+#: scikit-image sample photographs of cluttered or textured scenes (all ship in the wheel, no download).
+BACKGROUNDS = ("astronaut", "coffee", "chelsea", "rocket", "hubble_deep_field", "immunohistochemistry")
+CANVAS = (400, 300)
+THRESHOLDS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+
+
+def backgrounds() -> dict[str, np.ndarray]:
+    import skimage.data
+
+    return {name: getattr(skimage.data, name)()[..., :3] for name in BACKGROUNDS}
+
+
+def composite(obj_rgb: np.ndarray, obj_mask: np.ndarray, bg: np.ndarray, shadow: bool, rng) -> tuple:
+    """(rgb, true mask) of the object pasted on a random canvas-sized cut of ``bg``."""
+    w, h = CANVAS
+    scale = max(w / bg.shape[1], h / bg.shape[0]) * rng.uniform(1.0, 1.5)
+    big = np.asarray(Image.fromarray(bg).resize((round(bg.shape[1] * scale), round(bg.shape[0] * scale))))
+    y, x = rng.integers(0, big.shape[0] - h + 1), rng.integers(0, big.shape[1] - w + 1)
+    canvas = big[y : y + h, x : x + w].astype(np.float32)
+    rows, cols = np.flatnonzero(obj_mask.any(1)), np.flatnonzero(obj_mask.any(0))
+    cut = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+    side = rng.uniform(0.35, 0.7) * h / max(rows[-1] - rows[0] + 1, cols[-1] - cols[0] + 1)
+    size = (max(4, round((cols[-1] - cols[0] + 1) * side)), max(4, round((rows[-1] - rows[0] + 1) * side)))
+    rgb = np.asarray(Image.fromarray(obj_rgb[cut]).resize(size, Image.BILINEAR), np.float32)
+    alpha = np.asarray(Image.fromarray(obj_mask[cut].astype(np.uint8) * 255).resize(size, Image.BILINEAR))
+    ox, oy = rng.integers(8, w - size[0] - 8), rng.integers(8, h - size[1] - 8)
+    full = np.zeros((h, w), np.uint8)
+    full[oy : oy + size[1], ox : ox + size[0]] = alpha
+    if shadow:
+        dx, dy = rng.integers(4, 14, 2)
+        shade = np.roll(np.roll(full, dy, 0), dx, 1)
+        shade = np.asarray(Image.fromarray(shade).filter(ImageFilter.GaussianBlur(6)), np.float32) / 255.0
+        canvas *= 1.0 - 0.55 * shade[..., None]
+    a = (full.astype(np.float32) / 255.0)[..., None]
+    patch = np.zeros_like(canvas)
+    patch[oy : oy + size[1], ox : ox + size[0]] = rgb
+    out = np.clip(np.round(a * patch + (1 - a) * canvas), 0, 255).astype(np.uint8)
+    return out, full > 127
+
+
+def timed(fn, *args) -> tuple[Any, float]:
+    start = time.perf_counter()
+    out = fn(*args)
+    return out, time.perf_counter() - start
+
+
+def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, dict]:
+    """IoU and seconds of each method on one composite, the salient threshold sweep, and the confidence measures
+    (border uniformity; IoU of the salient and GrabCut masks)."""
+    iou, secs = {}, {}
+    mask, secs["uniform"] = timed(segment.uniform_background_mask, rgb)
+    iou["uniform"] = segment.mask_iou(mask, truth)
+    grabcut, secs["grabcut"] = timed(segment.grabcut_mask, rgb)
+    iou["grabcut"] = segment.mask_iou(grabcut, truth)
+    sal, secs["salient"] = timed(model.saliency, rgb)
+    sweep = {t: segment.mask_iou(segment.largest_component(sal > t), truth) for t in THRESHOLDS}
+    mask, more = timed(segment.largest_component, sal > salient.SALIENT_THRESHOLD)
+    secs["salient"] += more
+    iou["salient"] = segment.mask_iou(mask, truth)
+    refined, secs["salient+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    secs["salient+grabcut refine"] += secs["salient"]
+    iou["salient+grabcut refine"] = segment.mask_iou(refined, truth)
+    seg, secs["auto"] = timed(segment.segment, rgb, "auto")
+    iou["auto"] = segment.mask_iou(seg.mask, truth)
+    extra = {
+        "auto_source": seg.source,
+        "auto_agreement": seg.agreement,
+        "border_uniformity": segment.background_uniformity(rgb),
+        "agreement_salient_grabcut": segment.mask_iou(mask, grabcut),
+    }
+    return iou, secs, {"sweep": sweep, **extra}
+
+
+def confidence(rows: list[dict], method: str = "auto", key: str = "auto_agreement", below: float = 0.8) -> dict:
+    """How well a low agreement flags a wrong mask: the share of bad masks (IoU < 0.5) flagged, of good ones
+    (IoU >= 0.9) flagged by mistake, and the correlation of agreement and IoU."""
+    pairs = np.array([(r[key], r["iou"][method]) for r in rows if r[key] is not None])
+    if not len(pairs):
+        return {}
+    a, i = pairs.T
+    bad, good = i < 0.5, i >= 0.9
+    return {
+        "pearson_r": round(float(np.corrcoef(a, i)[0, 1]), 3),
+        f"share_of_bad_masks_flagged_below_{below}": round(float((a[bad] < below).mean()), 3) if bad.any() else None,
+        f"share_of_good_masks_flagged_below_{below}": round(float((a[good] < below).mean()), 3) if good.any() else None,
+        "mean_iou_when_not_flagged": round(float(i[a >= below].mean()), 4) if (a >= below).any() else None,
+    }
+
+
+def summarise(rows: list[dict]) -> dict[str, Any]:
+    methods = list(rows[0]["iou"])
+    cats = sorted({r["category"] for r in rows})
+
+    def mean(values):
+        return round(float(np.mean(values)), 4)
+
+    out: dict[str, Any] = {
+        "mask_iou_mean": {m: mean([r["iou"][m] for r in rows]) for m in methods},
+        "mask_iou_median": {m: round(float(np.median([r["iou"][m] for r in rows])), 4) for m in methods},
+        "share_iou_at_least_0.9": {m: mean([r["iou"][m] >= 0.9 for r in rows]) for m in methods},
+        "seconds_per_image_median": {m: round(float(np.median([r["secs"][m] for r in rows])), 4) for m in methods},
+        "mask_iou_per_category": {
+            c: {m: mean([r["iou"][m] for r in rows if r["category"] == c]) for m in methods} for c in cats
+        },  # fmt: skip
+    }
+    for shadow in (False, True):
+        sub = [r for r in rows if r["shadow"] == shadow]
+        out[f"mask_iou_mean_{'with' if shadow else 'without'}_shadow"] = {
+            m: mean([r["iou"][m] for r in sub]) for m in methods
+        }
+    out["salient_threshold_sweep"] = {str(t): mean([r["sweep"][t] for r in rows]) for t in THRESHOLDS}
+    out["confidence_of_auto_by_agreement"] = confidence(rows)
+    out["confidence_of_salient_by_agreement_with_grabcut"] = confidence(rows, "salient", "agreement_salient_grabcut")
+    return out
+
+
+def predictions(checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]], tmp: Path) -> dict[str, Any]:
+    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render."""
+    from affnerf.eval.surface import sample_seed, score_mesh, true_samples
+    from affnerf.metrics.segmentation import confusion_matrix, mean_iou
+    from affnerf.predict.predictor import Predictor
+    from affnerf.predict.shipped import shipped_model
+
+    predictor = Predictor.load(Path(shipped_model() if checkpoint == "shipped" else checkpoint), "auto")
+    n = len(predictor.classes)
+    scores: dict[str, dict[str, list[float]]] = {k: {"miou": [], "fscore_1cm": []} for k in ("composite", "clean")}
+    for k, (obj, view, comp) in enumerate(cases):
+        paths = {"composite": tmp / f"c{k}.png", "clean": tmp / f"r{k}.png"}
+        Image.fromarray(comp).save(paths["composite"])
+        Image.fromarray(obj.rgb(view)).save(paths["clean"])
+        others = [i for i in range(len(obj.record.frames)) if i != view]
+        truth = true_samples(obj, 0)
+        for kind, path in paths.items():
+            enc = predictor.encode_image(path)
+            conf = sum(confusion_matrix(obj.affordance(i), predictor.render(enc, obj.record.intrinsics,
+                                        obj.pose(i)).labels, n) for i in others)  # fmt: skip
+            scores[kind]["miou"].append(mean_iou(conf))
+            surf = score_mesh(predictor.mesh(enc, 96), truth, sample_seed(0, obj.record.object_id))
+            scores[kind]["fscore_1cm"].append(surf["fscore_1cm"] if surf else 0.0)
+    return {
+        "checkpoint": checkpoint,
+        "objects": len(cases),
+        **{kind: {m: round(float(np.mean(v)), 4) for m, v in s.items()} for kind, s in scores.items()},
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
+    parser.add_argument("--composites", type=int, default=48)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--checkpoint", "--run", default=None, help="also score predictions (a run, or 'shipped')")
+    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    ds = Dataset.open(args.data)
+    entries = ds.objects()
+    picks = rng.permutation(len(entries))[: args.composites]
+    bgs = backgrounds()
+    model = salient.load_salient_model()
+    model.saliency(np.zeros((32, 32, 3), np.uint8))  # warm-up: the first run pays one-off allocations
+    rows, cases = [], []
+    for k, idx in enumerate(picks):
+        obj = ds.load_object(entries[idx])
+        view = int(rng.integers(len(obj.record.frames)))
+        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
+        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
+        iou, secs, extra = measure_one(rgb, truth, model)
+        rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
+                     "shadow": shadow, "iou": iou, "secs": secs, **extra})  # fmt: skip
+        cases.append((obj, view, rgb))
+        print(f"{k:3d} {obj.record.object_id:16s} {bg:22s} shadow={shadow!s:5s} "
+              + " ".join(f"{m}={v:.3f}" for m, v in iou.items()))  # fmt: skip
+    result = {
+        "benchmark": "segment_composites",
+        "settings": {
+            "data": str(args.data),
+            "composites": len(rows),
+            "seed": args.seed,
+            "canvas": CANVAS,
+            "backgrounds": BACKGROUNDS,
+            "salient_threshold": salient.SALIENT_THRESHOLD,
+            "auto_uniformity": segment.AUTO_UNIFORMITY,
+            "refine_salient": segment.REFINE_SALIENT,
+            "onnx_threads": salient.SESSION_THREADS,
+        },  # fmt: skip
+        "machine": describe_machine(),
+        **summarise(rows),
+        "composites": [{k: v for k, v in r.items() if k != "sweep"} for r in rows],
+    }
+    if args.checkpoint:
+        with tempfile.TemporaryDirectory() as tmp:
+            result["prediction"] = predictions(args.checkpoint, cases, Path(tmp))
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(result, indent=1) + "\n")
+    for key in ("mask_iou_mean", "seconds_per_image_median", "salient_threshold_sweep"):
+        print(key, result[key])
+    print(f"-> {args.out}")
+
+
+if __name__ == "__main__":
+    main()
