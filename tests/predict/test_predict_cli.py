@@ -133,6 +133,8 @@ def test_no_separable_object_warns_once_and_records_the_separation(trained_runs,
     separation = json.loads((out / "prediction.json").read_text())["separation"]
     assert separation["source"] == "uniform background" and separation["confident"] is False
     assert separation["background_uniformity"] < 0.5 and separation["problems"]
+    if separation["note"] is not None:  # auto ran the salient model and GrabCut first (with the optional extra)
+        assert separation["note"].startswith("neither the salient model nor GrabCut found an object")
 
 
 def test_a_clean_photo_records_a_confident_separation_without_warning(trained_runs, photo, tmp_path, capsys):
@@ -172,40 +174,40 @@ def test_a_model_without_surface_writes_no_mesh_says_so_and_keeps_the_other_outp
     assert summary["mesh"] is None and summary["mesh_note"].startswith("the model predicts no surface")
     assert summary["classes_present"] == [] and summary["surface_area_m2"] == {}
     assert not (out / "affordance_model.ply").exists() and not (out / "affordance_model.glb").exists()  # none stale
-    assert set(summary["files"]) == {"input.png", "turntable/000.png", "turntable/001.png", "turntable.gif",
-                                     "prediction.json"}  # fmt: skip
+    assert set(summary["files"]) == {"input.png", "mask.png", "turntable/000.png", "turntable/001.png",
+                                     "turntable.gif", "prediction.json"}  # fmt: skip
     for name in summary["files"]:
         assert (out / name).is_file(), name
 
 
-def _small(trained_runs, out):
+def _tiny_args(trained_runs, out):
     return ["predict", "--run", str(trained_runs["affnerf"]), "--out", str(out), "--views", "2", "--width", "16",
             "--height", "12", "--resolution", "16", "--device", "cpu"]  # fmt: skip
 
 
 def test_mask_png_is_the_mask_used_and_reads_back_with_mask(trained_runs, photo, tmp_path):
     out = tmp_path / "pred"
-    assert main(_small(trained_runs, out) + ["--image", str(photo["rgb"])]) == 0
+    assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"])]) == 0
     summary = json.loads((out / "prediction.json").read_text())
     mask = np.asarray(Image.open(out / "mask.png"))
     assert "mask.png" in summary["files"] and mask.shape == np.asarray(Image.open(photo["rgb"])).shape[:2]
     assert set(np.unique(mask)) == {0, 255} and summary["separation"]["source"] == "uniform background"
     assert {"agreement", "compared_with", "note"} <= set(summary["separation"])
     again = tmp_path / "again"
-    assert main(_small(trained_runs, again) + ["--image", str(photo["rgb"]), "--mask", str(out / "mask.png")]) == 0
+    assert main(_tiny_args(trained_runs, again) + ["--image", str(photo["rgb"]), "--mask", str(out / "mask.png")]) == 0
     assert json.loads((again / "prediction.json").read_text())["object_bbox"] == summary["object_bbox"]
     assert (np.asarray(Image.open(again / "mask.png")) == mask).all()
 
 
 def test_segment_none_and_bad_segment_values(trained_runs, photo, tmp_path, capsys):
     out = tmp_path / "pred"
-    assert main(_small(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "none"]) == 0
+    assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "none"]) == 0
     summary = json.loads((out / "prediction.json").read_text())
     assert summary["object_separated_by"] == "whole image" and summary["separation"]["confident"]
     assert np.asarray(Image.open(out / "mask.png")).min() == 255
     capsys.readouterr()
     with pytest.raises(SystemExit) as exit_info:
-        main(_small(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "magic"])
+        main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "magic"])
     assert exit_info.value.code == 2 and "magic" in capsys.readouterr().err
 
 
@@ -217,6 +219,6 @@ def test_segment_salient_without_the_extra_is_exit_2_naming_it(trained_runs, pho
     monkeypatch.setitem(sys.modules, "onnxruntime", None)
     monkeypatch.setattr(salient, "_LOADED", {})
     out = tmp_path / "pred"
-    assert main(_small(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "salient"]) == 2
+    assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "salient"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "pip install 'affnerf[segment]'" in err and not out.exists()

@@ -246,8 +246,12 @@ def segment(rgb: np.ndarray, method: str = "auto", name: str = "image") -> Segme
     if method == "grabcut":
         return Segmentation(grabcut_mask(rgb), "grabcut")
     try:
-        return salient_segmentation(rgb, use_grabcut_on_disagreement=method == "auto")
+        seg = salient_segmentation(rgb, use_grabcut_on_disagreement=method == "auto")
     except SalientUnavailable as err:
         if method == "salient":
             raise
         return _fallback(rgb, err, name)
+    if method == "auto" and not seg.mask.any():  # nothing stands out (noise, a gradient): judged by its border
+        note = "neither the salient model nor GrabCut found an object; separated by the image border's colour"
+        return Segmentation(uniform_background_mask(rgb), "uniform background", note=note)
+    return seg
