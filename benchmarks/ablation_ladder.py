@@ -112,6 +112,24 @@ def curve(run: Path, objects: list[ObjectData], views: int, scale: float) -> lis
     return sorted(points, key=lambda p: p["step"])
 
 
+def score_only(args: argparse.Namespace) -> None:
+    """Score a finished run's checkpoints (its time-to-quality curve) or one checkpoint on the ladder's objects."""
+    objects = heldout(args.data, args.objects)
+    payload: dict[str, Any] = {"machine": describe_machine(), "heldout_objects": len(objects)}
+    if args.reference:
+        model = load_model(args.reference).model.eval()
+        result = validate(model, objects, args.scale, views_per_object=args.views)
+        payload["reference"] = {"checkpoint": str(args.reference), "mIoU": result.miou, "PSNR": result.psnr}
+    if args.score_run:
+        model = load_model(args.score_run).model.eval()
+        summary = json.loads((args.score_run / "summary.json").read_text())
+        run = {"steps": summary["step"], "train_seconds": summary["seconds"]}
+        run["curve"] = curve(args.score_run, objects, args.views, args.scale)
+        payload["runs"] = {args.score_run.name: {**run, **fscores(model, objects, args.mesh_resolution)}}
+    print(json.dumps(payload, indent=2)[:2000], flush=True)
+    args.out.write_text(json.dumps(payload, indent=2) + "\n")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True)
@@ -126,7 +144,12 @@ def main() -> None:
     parser.add_argument("--scale", type=float, default=0.25)
     parser.add_argument("--mesh-resolution", type=int, default=64)
     parser.add_argument("--only", nargs="*", default=None, help="run only these rungs (names)")
+    parser.add_argument("--score-run", type=Path, default=None, help="only score this finished run's checkpoints")
+    parser.add_argument("--reference", type=Path, default=None, help="only score this checkpoint (the old model)")
     args = parser.parse_args()
+    if args.score_run or args.reference:
+        score_only(args)
+        return
     base = replace(SMALL, data=args.data, steps=args.steps, time_limit=args.minutes, val_every=0, progress=False)
     base = replace(base, device="cpu", cache_dir=args.cache or args.work / "cache", out=args.work / "unused")
     base = replace(base, checkpoint_every=args.checkpoint_every, keep_checkpoints=1000)

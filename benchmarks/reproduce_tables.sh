@@ -2,6 +2,7 @@
 # Reproduce the committed Table 2 / Table 3 results and the shipped model (benchmarks/results/, MODEL_CARD.md).
 # These are the commands that made them on the 2-core CPU machine (about 3 hours there; each training runs
 # single-threaded so that two run side by side). Every step is resumable: rerun after an interruption.
+# The ablation ladder that chose the recipe is benchmarks/ablation_ladder.py (benchmarks/README.md).
 # On a GPU machine set DEVICE=cuda and raise the steps; the time limits only cap a CPU session.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,18 +11,19 @@ W="${WORK:-benchmarks/.work/tables}"
 R="benchmarks/results"
 DEVICE="${DEVICE:-cpu}"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
-STEPS="${STEPS:-20000}"           # AFF-NeRF, small configuration, all eight categories
-PIX_STEPS="${PIX_STEPS:-6000}"    # PixelNeRF-M baseline (3 input views)
-LOCO_STEPS="${LOCO_STEPS:-4000}"  # leave-one-category-out runs
-EVAL="--scale 0.25 --target-views 20 --device $DEVICE"
+STEPS="${STEPS:-8500}"            # AFF-NeRF, small configuration, all eight categories
+PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views)
+LOCO_STEPS="${LOCO_STEPS:-2000}"  # leave-one-category-out runs
+EVAL="--scale 0.5 --target-views 20 --max-objects 5 --device $DEVICE"
 resume() { [ -d "$1/checkpoints" ] && echo --resume || true; }
 all_but() { python3 -c "import sys; c='screwdriver pen scissors eyeglasses bucket bottle cabinet teapot'.split(); c.remove(sys.argv[1]); print(','.join(c))" "$1"; }
 
-# 1. data: 8 categories x 20 objects (16 train, 2 val, 2 test each), 40 views of 400x300
-$A data generate --out "$W/data" --objects-per-category 20 --views 40 --workers 2 --seed 0
+# 1. data: 8 categories x 80 objects (64 train, 8 val, 8 test each), 30 views of 400x300
+$A data generate --out "$W/data" --objects-per-category 80 --views 30 --workers 2 --seed 0
 
 # 2. training (on the CPU machine these ran two at a time, stopped by their time limits: see MODEL_CARD.md)
-$A train --data "$W/data" --out "$W/affnerf" --config small --steps "$STEPS" --time-limit 85 --device "$DEVICE" $(resume "$W/affnerf")
+$A train --data "$W/data" --out "$W/affnerf" --config small --steps "$STEPS" --time-limit 82 --device "$DEVICE" \
+    --checkpoint-every 500 --keep-checkpoints 100 --val-every 0 $(resume "$W/affnerf")
 $A train --data "$W/data" --out "$W/pixelnerf" --config small --steps "$PIX_STEPS" --time-limit 50 --device "$DEVICE" \
     --model.kind pixelnerf --input-views 3 $(resume "$W/pixelnerf")
 for held in teapot scissors; do

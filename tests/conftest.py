@@ -93,6 +93,12 @@ def tiny_train_config(train_dataset, tmp_path):
             device="cpu",
             cache_dir=tmp_path / "cache",
             image_scale=1.0,
+            # the paper's loss unless a test asks for more (tests/train/test_quality_options.py turns them on)
+            points_weight=0.0,
+            mask_weight=0.0,
+            depth_weight=0.0,
+            affordance_balance=0.0,
+            input_jitter=0.0,
         )
         return replace(base, **overrides)
 

@@ -7,6 +7,10 @@ from dataclasses import fields
 from affnerf.train.config import SMALL, TrainConfig
 
 
+#: Training options beyond the paper that the ``small`` preset turns on and tiny test runs may turn off.
+LOSS_OPTIONS = ("points_weight", "mask_weight", "depth_weight", "affordance_balance", "input_jitter")
+
+
 def train_argv(config: TrainConfig, *extra: str) -> list[str]:
     """``affnerf train`` arguments that rebuild ``config`` from the ``small`` preset: its paths, the training
     settings tiny test runs change, and every model field that differs from the preset's; ``extra`` is appended."""
@@ -23,6 +27,9 @@ def train_argv(config: TrainConfig, *extra: str) -> list[str]:
         "rays-per-step": config.rays_per_step,
         "objects-per-step": config.objects_per_step,
     }
+    for name in LOSS_OPTIONS:
+        if getattr(config, name) != getattr(SMALL, name):
+            values[name.replace("_", "-")] = getattr(config, name)
     if config.cache_dir is not None:
         values["cache-dir"] = config.cache_dir
     for f in fields(config.model):
