@@ -6,7 +6,6 @@ from dataclasses import fields
 
 from affnerf.train.config import SMALL, TrainConfig
 
-
 #: Training options beyond the paper that the ``small`` preset turns on and tiny test runs may turn off.
 LOSS_OPTIONS = ("points_weight", "mask_weight", "depth_weight", "affordance_balance", "input_jitter")
 
