@@ -12,10 +12,17 @@ from typing import get_args, get_type_hints
 from affnerf.model.affnerf import AffNeRF
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
+from affnerf.model.gsnerf import GSNeRF
 from affnerf.model.pixelnerf import PixelNeRF
+from affnerf.model.semantic_ray import SemanticRay
 
 #: Kind name -> model class.
-MODEL_KINDS: dict[str, type[ConditionedNeRF]] = {"affnerf": AffNeRF, "pixelnerf": PixelNeRF}
+MODEL_KINDS: dict[str, type[ConditionedNeRF]] = {
+    "affnerf": AffNeRF,
+    "pixelnerf": PixelNeRF,
+    "semantic-ray": SemanticRay,
+    "gsnerf": GSNeRF,
+}
 
 
 def register_model(kind: str, cls: type[ConditionedNeRF]) -> None:
