@@ -12,11 +12,13 @@ from affnerf.eval.registry import MethodContext, MethodSpec, method_names, parse
 
 
 def test_builtin_methods_are_registered_in_order():
-    assert method_names()[:5] == ["affnerf", "pixelnerf", "semantic-nerf", "retrieval", "constant"]
+    expected = ["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval", "constant"]
+    assert method_names()[:7] == expected
 
 
 def test_all_leaves_out_the_constant_floor():
-    assert parse_methods("all") == ["affnerf", "pixelnerf", "semantic-nerf", "retrieval"]
+    assert parse_methods("all") == ["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval"]
+    assert parse_methods("semantic-ray,gsnerf") == ["semantic-ray", "gsnerf"]
     assert parse_methods(" retrieval , constant ") == ["retrieval", "constant"]
 
 

@@ -30,16 +30,17 @@ class EvalConfig:
     """Settings of ``affnerf eval``.
 
     Attributes:
-        run: the trained run (AFF-NeRF for ``affnerf`` and ``retrieval``; a PixelNeRF-M run for ``pixelnerf``;
-            not used by ``semantic-nerf`` and ``constant``).
+        run: the trained run (AFF-NeRF for ``affnerf`` and ``retrieval``; a run of the method's own kind for
+            ``pixelnerf``, ``semantic-ray`` and ``gsnerf``; not used by ``semantic-nerf`` and ``constant``).
         data: the dataset.
         out: output folder.
         split: ``test`` (held-out instances), ``unseen`` (held-out categories), ``val``, or ``all`` (every object,
             e.g. of a category a leave-one-category-out run never saw).
-        method: one or more registered methods, comma-separated (built in: affnerf, pixelnerf, semantic-nerf,
-            retrieval, constant; ``all`` = every method but constant); see :mod:`affnerf.eval.registry`.
-        input_views: views each method is given (1: single image; PixelNeRF-M is also run with 3, Semantic-NeRF
-            with 20 as a many-view reference).
+        method: one or more registered methods, comma-separated (built in: affnerf, pixelnerf, semantic-ray,
+            gsnerf, semantic-nerf, retrieval, constant; ``all`` = every method but constant); see
+            :mod:`affnerf.eval.registry`.
+        input_views: views each method is given (1: single image; PixelNeRF-M, Semantic-Ray and GSNeRF are also
+            run with 3 posed views, Semantic-NeRF with 20 as a many-view reference).
         target_views: views scored per object (K = 20 in conventions §5).
         scale: resolution of scored views as a fraction of the dataset's images.
         seed: seed of the view choice.

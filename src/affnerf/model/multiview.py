@@ -159,7 +159,7 @@ class RayBlockRenderer(FieldRenderer):
 
         def flat(points: torch.Tensor, ray_of_point: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
             trunk, color = condition(points.reshape(r, s, 3), rays)
-            return trunk.reshape(r * s, -1), color.reshape(r * s, -1)
+            return trunk.reshape(r * s, trunk.shape[-1]), color.reshape(r * s, color.shape[-1])
 
         return super()._stage(field, t, far, origins, dirs, rays, flat, background, deltas)
 

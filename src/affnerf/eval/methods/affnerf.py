@@ -1,5 +1,6 @@
-"""Image-conditioned fields under the protocol (AFF-NeRF, PixelNeRF-M): encode the input views, render the
-target cameras, and extract the labelled mesh of the encoding for the 3D metrics."""
+"""Image-conditioned fields under the protocol (AFF-NeRF and the posed baselines PixelNeRF-M, Semantic-Ray,
+GSNeRF): encode the input views, render the target cameras, and extract the labelled mesh of the encoding for the
+3D metrics."""
 
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ from affnerf.rendering.grid import OccupancyGrid
 
 
 class ConditionedNeRFMethod:
-    """A trained model of either kind; its name is the model's kind (``affnerf`` or ``pixelnerf``).
+    """A trained model of any kind; its name is the model's kind (``affnerf``, ``pixelnerf``, ``semantic-ray``,
+    ``gsnerf``).
 
     Args:
         loaded: the model.
@@ -112,4 +114,16 @@ register_method(
 )
 register_method(
     MethodSpec("pixelnerf", _build("pixelnerf"), "PixelNeRF-M: pixel-aligned features at the posed input views")
+)
+register_method(
+    MethodSpec(
+        "semantic-ray",
+        _build("semantic-ray"),
+        "Semantic-Ray: Cross-Reprojection Attention over the posed input views (baseline)",
+    )
+)
+register_method(
+    MethodSpec(
+        "gsnerf", _build("gsnerf"), "GSNeRF: per-view depth from a cost volume, depth-guided rendering (baseline)"
+    )
 )
