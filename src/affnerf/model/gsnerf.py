@@ -75,8 +75,8 @@ class GeoEncoding(ViewEncoding):
         depth: (B, V, h, w) predicted z-depth (m) of every source view.
     """
 
-    semantic: torch.Tensor = None  # type: ignore[assignment]
-    depth: torch.Tensor = None  # type: ignore[assignment]
+    semantic: torch.Tensor
+    depth: torch.Tensor
 
 
 def pixel_points(intrinsics: torch.Tensor, c2w: torch.Tensor, depths: torch.Tensor, h: int, w: int, size: int):
@@ -231,17 +231,21 @@ class GSNeRF(MultiViewNeRF):
             depth=torch.stack([g[0] for g in geo]),
         )
 
+    def relative_depth(self, encoding: GeoEncoding, b: int, flat: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        """Object b's (N, 3) points in its V views: (N, V) depth relative to the view's predicted depth (m; > 0
+        behind it), (N, V, 3) camera-frame positions and (N, V) validity."""
+        w2c, k, size = encoding.world_to_camera[b], encoding.intrinsics[b], encoding.size
+        predicted, cams, valid = sample_views(flat, encoding.depth[b][:, None], w2c, k, size)
+        return -cams[..., 2] - predicted[..., 0], cams, valid
+
     def view_samples(self, encoding: GeoEncoding, b: int, flat: torch.Tensor) -> tuple[torch.Tensor, ...]:
         """Object b's (N, 3) points in its V views: (N, V, C + Cs + 3) features, semantic features and colours,
-        (N, V) depth relative to the view's predicted depth (m; > 0 behind it), (N, V, 3) camera-frame positions and
-        (N, V) validity."""
+        then :meth:`relative_depth`'s three outputs."""
         w2c, k, size = encoding.world_to_camera[b], encoding.intrinsics[b], encoding.size
         maps = torch.cat([encoding.features[b], encoding.semantic[b]], dim=1)
-        feats, cams, valid = sample_views(flat, maps, w2c, k, size)
+        feats, _, _ = sample_views(flat, maps, w2c, k, size)
         colours, _, _ = sample_views(flat, encoding.images[b], w2c, k, size)
-        predicted, _, _ = sample_views(flat, encoding.depth[b][:, None], w2c, k, size)
-        relative = -cams[..., 2] - predicted[..., 0]
-        return torch.cat([feats, colours], dim=-1), relative, cams, valid
+        return torch.cat([feats, colours], dim=-1), *self.relative_depth(encoding, b, flat)
 
     def aggregate(self, tokens: torch.Tensor, visible: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(N, V, D) view tokens and (N, V) visibility -> (N, D) features (the mean-and-variance token after
@@ -280,7 +284,7 @@ class GSNeRF(MultiViewNeRF):
     def ray_depth(self, encoding: GeoEncoding, b: int, points: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """(r,) predicted depth of object b's rays from their (r, S, 3) samples at depths (r, S): the sample whose
         depth in the views that see it is closest to their predicted depths (mean absolute difference)."""
-        _, relative, _, valid = self.view_samples(encoding, b, points.reshape(-1, 3))
+        relative, _, valid = self.relative_depth(encoding, b, points.reshape(-1, 3))
         valid = valid.reshape(*t.shape, -1)
         err = (relative.reshape(valid.shape).abs() * valid).sum(-1) / valid.sum(-1).clamp(min=1)
         err = torch.where(valid.any(-1), err, torch.full_like(err, float("inf")))
