@@ -98,11 +98,13 @@ def wall_times(run: Path) -> dict[int, float]:
     return {r["step"]: r["time/seconds"] for r in rows if "time/seconds" in r}
 
 
-def curve(run: Path, objects: list[ObjectData], views: int, scale: float) -> list[dict[str, float]]:
-    """Held-out mIoU and PSNR of every kept checkpoint, with the wall time the run had reached there."""
+def curve(run: Path, objects: list[ObjectData], views: int, scale: float, stride: int = 1) -> list[dict[str, float]]:
+    """Held-out mIoU and PSNR of every ``stride``-th kept checkpoint (and the last), with the wall time the run had
+    reached there."""
     times = wall_times(run)
     points = []
-    for ckpt in sorted((run / "checkpoints").glob("*.pt")):
+    kept = sorted((run / "checkpoints").glob("*.pt"))
+    for ckpt in [c for i, c in enumerate(kept) if i % stride == stride - 1 or i == len(kept) - 1]:
         loaded = load_model(ckpt)
         result = validate(loaded.model.eval(), objects, scale, views_per_object=views)
         step = int(torch.load(ckpt, map_location="cpu", weights_only=False)["step"])
@@ -124,7 +126,7 @@ def score_only(args: argparse.Namespace) -> None:
         model = load_model(args.score_run).model.eval()
         summary = json.loads((args.score_run / "summary.json").read_text())
         run = {"steps": summary["step"], "train_seconds": summary["seconds"]}
-        run["curve"] = curve(args.score_run, objects, args.views, args.scale)
+        run["curve"] = curve(args.score_run, objects, args.views, args.scale, args.stride)
         payload["runs"] = {args.score_run.name: {**run, **fscores(model, objects, args.mesh_resolution)}}
     print(json.dumps(payload, indent=2)[:2000], flush=True)
     args.out.write_text(json.dumps(payload, indent=2) + "\n")
@@ -144,6 +146,7 @@ def main() -> None:
     parser.add_argument("--scale", type=float, default=0.25)
     parser.add_argument("--mesh-resolution", type=int, default=64)
     parser.add_argument("--only", nargs="*", default=None, help="run only these rungs (names)")
+    parser.add_argument("--stride", type=int, default=1, help="with --score-run: score every n-th checkpoint")
     parser.add_argument("--score-run", type=Path, default=None, help="only score this finished run's checkpoints")
     parser.add_argument("--reference", type=Path, default=None, help="only score this checkpoint (the old model)")
     args = parser.parse_args()
