@@ -98,3 +98,24 @@ def test_semantic_ray_renders_the_tiny_dataset_and_trains_five_steps(train_datas
     assert fine is not None and fine.affordance.shape == (5, 12) and torch.isfinite(fine.rgb).all()
     summary = train(config)
     assert summary.step == 5 and (config.out / "checkpoints" / "step_00000005.pt").exists()
+
+
+def test_the_fast_path_skips_empty_rays_and_renders_the_others_as_in_training():
+    from affnerf.model.config import ModelConfig
+    from affnerf.rendering.grid import OccupancyGrid
+
+    torch.manual_seed(0)
+    config = ModelConfig(kind="semantic-ray", encoder_width=0.125, field_width=16, code_dim=8, clip_to_cube=True)
+    model = build_model(replace(config, num_coarse=8, num_fine=8), 5).eval()
+    pose = torch.eye(4)
+    pose[2, 3] = 0.7
+    encoding = model.encode_views(torch.rand(1, 2, 3, 32, 32), K.repeat(1, 2, 1), pose.repeat(1, 2, 1, 1))
+    origins, dirs = torch.tensor([[0.05, 0.05, 0.8], [-0.1, -0.1, 0.8]]), torch.tensor([[0.0, 0.0, -1.0]] * 2)
+    occupied = torch.zeros(4, 4, 4, dtype=torch.bool)
+    occupied[2, 2, :] = True  # the column [0, 0.125]^2 the first ray runs down; the second ray misses it
+    with torch.no_grad():
+        fast = model.render_rays_in_grid(encoding, OccupancyGrid(occupied, 0.25), origins, dirs, torch.ones(2, 3))
+        _, fine = model.render_rays(encoding, torch.zeros(1, dtype=torch.long), origins[:1], dirs[:1], torch.ones(1, 3))
+    torch.testing.assert_close(fast.rgb[0], fine.rgb[0])
+    torch.testing.assert_close(fast.affordance[0], fine.affordance[0])
+    assert fast.opacity[1] == 0 and torch.all(fast.rgb[1] == 1)

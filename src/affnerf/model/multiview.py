@@ -25,9 +25,12 @@ from affnerf.model.field import ConditionalField
 from affnerf.model.pixelnerf import project
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs, scatter_rays
 from affnerf.model.resnet import ResNet18
-from affnerf.rendering.grid import OccupancyGrid
+from affnerf.rendering.grid import OccupancyGrid, occupied_samples
+from affnerf.rendering.rays import intersect_aabb
 from affnerf.rendering.samplers import merge_samples, stratified_samples
 
+#: Positions per ray checked against the occupancy grid (as :meth:`FieldRenderer.render_rays_in_grid`).
+GRID_CANDIDATES = 128
 #: (points (R, S, 3), rays (R,)) -> (trunk input (R, S, Dt), colour input (R, S, Dc)).
 BlockCondition = Callable[[torch.Tensor, torch.Tensor], tuple[torch.Tensor, torch.Tensor]]
 #: (origins (R, 3), dirs (R, 3), rays (R,), coarse samples (R, S), near (R,), far (R,), perturb, generator) ->
@@ -241,11 +244,17 @@ class MultiViewNeRF(ConditionedNeRF):
         background: torch.Tensor,
         num: int = 32,
     ) -> RayOutputs:
-        """The empty-space-skipping fast path with the block conditioning (samples in occupied cells only)."""
-        obj = torch.zeros(len(origins), dtype=torch.long, device=origins.device)
-        return self.renderer.render_rays_in_grid(
-            self.ray_condition(encoding, obj), grid, origins, dirs, background, num
-        )
+        """The fast path of attention models: rays that cross no occupied cell of ``grid`` render background
+        without evaluating the field; the others are rendered as in training (coarse, then fine samples), since
+        attention along a ray depends on where its samples are (``num`` is not used)."""
+        c = self.config
+        near, far, inside = intersect_aabb(origins, dirs, grid.half_extent, c.near, c.far)
+        _, _, crosses = occupied_samples(grid, origins, dirs, near, far, 1, GRID_CANDIDATES)
+        hit = crosses & inside
+        idx = torch.nonzero(hit, as_tuple=True)[0]
+        obj = torch.zeros(len(idx), dtype=torch.long, device=origins.device)
+        coarse, fine = self.render_rays(encoding, obj, origins[idx], dirs[idx], background[idx])
+        return scatter_rays(fine if fine is not None else coarse, hit, background)
 
 
 def per_object(
