@@ -7,8 +7,10 @@ import math
 from dataclasses import replace
 
 import torch
+from support import train_argv
 from torch.nn import functional as F
 
+from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
 from affnerf.model.inputs import dataset_views
 from affnerf.model.multiview import attend, sample_views
@@ -81,8 +83,6 @@ def test_attention_along_the_ray_mixes_a_views_samples_and_a_one_sample_ray_keep
 
 
 def test_semantic_ray_renders_the_tiny_dataset_and_trains_five_steps(train_dataset, tiny_train_config):
-    from affnerf.train.trainer import train
-
     config = tiny_train_config(steps=5, checkpoint_every=5, input_views=2)
     config = replace(config, model=replace(config.model, kind="semantic-ray"))
     torch.manual_seed(0)
@@ -96,8 +96,10 @@ def test_semantic_ray_renders_the_tiny_dataset_and_trains_five_steps(train_datas
     dirs = -origins / origins.norm(dim=-1, keepdim=True) + torch.randn(5, 3) * 0.05
     coarse, fine = model.render_rays(encoding, torch.zeros(5, dtype=torch.long), origins, dirs, torch.ones(5, 3))
     assert fine is not None and fine.affordance.shape == (5, 12) and torch.isfinite(fine.rgb).all()
-    summary = train(config)
-    assert summary.step == 5 and (config.out / "checkpoints" / "step_00000005.pt").exists()
+    argv = train_argv(config, "--input-views", "2")
+    assert "--model.kind" in argv and argv[argv.index("--model.kind") + 1] == "semantic-ray"
+    assert main(argv) == 0  # affnerf train --model.kind semantic-ray --input-views 2 ...
+    assert (config.out / "checkpoints" / "step_00000005.pt").exists()
 
 
 def test_the_fast_path_skips_empty_rays_and_renders_the_others_as_in_training():
