@@ -100,7 +100,7 @@ def test_the_source_depth_loss_is_the_l1_over_pixels_with_a_surface():
     encoding = _one_view_encoding(0.6)
     truth = torch.zeros(1, 1, 32, 32)
     truth[..., :16, :] = 0.5  # top half: a surface 0.1 m nearer than predicted; bottom half: none
-    assert GSNeRF.source_depth_loss(None, encoding, truth).item() == pytest.approx(0.1)  # type: ignore[arg-type]
+    assert GSNeRF.source_depth_loss(encoding, truth).item() == pytest.approx(0.1)
 
 
 def test_gsnerf_renders_the_tiny_dataset_and_trains_five_steps(train_dataset, tiny_train_config):

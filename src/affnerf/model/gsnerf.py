@@ -306,7 +306,8 @@ class GSNeRF(MultiViewNeRF):
 
         return sample
 
-    def source_depth_loss(self, encoding: GeoEncoding, depth: torch.Tensor) -> torch.Tensor:
+    @staticmethod
+    def source_depth_loss(encoding: GeoEncoding, depth: torch.Tensor) -> torch.Tensor:
         """Mean |predicted - true| z-depth (m) of the source views where the truth has a surface.
 
         Args:
