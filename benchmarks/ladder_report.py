@@ -56,7 +56,7 @@ def plot(curves: dict[str, list[dict[str, float]]], reference: float | None, pat
     d.line([xy(0, ymin), xy(0, ymax)], fill="black")
     for k in range(6):
         m, v = xmax * k / 5, ymin + (ymax - ymin) * k / 5
-        d.text((xy(m, ymin)[0] - 8, h - bottom + 6), f"{m:.0f}", fill="black")
+        d.text((xy(m, ymin)[0] - 8, h - bottom + 6), f"{m:.1f}", fill="black")
         d.text((4, xy(0, v)[1] - 6), f"{v:.2f}", fill="black")
     d.text((w // 2 - 80, h - 16), "wall minutes (one core)", fill="black")
     d.text((4, 2), "held-out val mIoU", fill="black")
