@@ -22,26 +22,17 @@ from typing import Any
 
 import numpy as np
 import torch
+from ablation_ladder import warm_cache  # benchmarks/ is the script's folder, first on sys.path
 
 from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import load_model
-from affnerf.train.cache import cached_frames, cached_points
+from affnerf.train.cache import cached_points
 from affnerf.train.config import SMALL, TrainConfig, config_to_json
 from affnerf.train.points import split_counts
 from affnerf.train.trainer import train
 from affnerf.train.validate import validate
-
-
-def warm_cache(config: TrainConfig) -> None:
-    """Decode every training object's frames and make its point set before any run is timed."""
-    ds = Dataset.open(config.data)
-    sigmas = (config.point_sigma_near, config.point_sigma_far)
-    for entry in ds.objects("train"):
-        cached_frames(ds.load_object(entry), config.cache_dir, config.image_scale, config.model.encoder_resolution)
-        mesh = ds.root / entry.path / "mesh.ply"
-        cached_points(mesh, entry.id, config.cache_dir, config.model.scene_half_extent, sigmas)
 
 
 @torch.no_grad()

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import fields
 
+import torch
+
 from affnerf.train.config import SMALL, TrainConfig
 
 #: Training options beyond the paper that the ``small`` preset turns on and tiny test runs may turn off.
@@ -42,3 +44,20 @@ def train_argv(config: TrainConfig, *extra: str) -> list[str]:
         else:
             argv += [f"--{name}", str(value)]
     return argv + list(extra)
+
+
+def straight_and_resumed_weights(straight: TrainConfig, stop_at: int) -> tuple[dict, dict]:
+    """Train ``straight`` to its end, and a copy (``<out>_halves``) stopped at ``stop_at`` then resumed; the final
+    checkpoints' model weights of both (to check that resuming is exact)."""
+    from dataclasses import replace
+
+    from affnerf.train.trainer import train
+
+    train(straight)
+    halves = replace(straight, out=straight.out.parent / f"{straight.out.name}_halves", stop_at=stop_at)
+    train(halves)
+    train(replace(halves, stop_at=0, resume=True))
+    name = f"step_{straight.steps:08d}.pt"
+    a = torch.load(straight.out / "checkpoints" / name, weights_only=True)["model"]
+    b = torch.load(halves.out / "checkpoints" / name, weights_only=True)["model"]
+    return a, b

@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import torch
+from support import straight_and_resumed_weights
 
 from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
@@ -50,12 +51,7 @@ def test_points_are_logged_and_the_occupancy_loss_falls(tiny_train_config, train
 
 def test_interrupted_and_resumed_run_with_points_ends_with_the_same_weights(tiny_train_config, tmp_path):
     straight = tiny_train_config(out=tmp_path / "straight", points_weight=0.5, points_per_object=256)
-    train(straight)
-    halves = replace(straight, out=tmp_path / "halves", stop_at=10)
-    train(halves)
-    train(replace(halves, stop_at=0, resume=True))
-    a = torch.load(straight.out / "checkpoints" / "step_00000020.pt", weights_only=True)["model"]
-    b = torch.load(halves.out / "checkpoints" / "step_00000020.pt", weights_only=True)["model"]
+    a, b = straight_and_resumed_weights(straight, stop_at=10)
     assert all(torch.equal(a[k], b[k]) for k in a)
 
 

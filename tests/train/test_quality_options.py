@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import torch
+from support import straight_and_resumed_weights
 
 from affnerf.train.cache import cached_frames
 from affnerf.train.config import PAPER
@@ -55,11 +56,6 @@ def test_cached_depth_matches_the_dataset_and_balanced_weights_favour_rare_class
 def test_a_run_with_every_option_resumes_to_the_same_weights(tiny_train_config, tmp_path):
     straight = tiny_train_config(out=tmp_path / "straight", **ALL_ON)
     straight = replace(straight, model=replace(straight.model, conditioning="film"))
-    train(straight)
-    halves = replace(straight, out=tmp_path / "halves", stop_at=10)
-    train(halves)
-    train(replace(halves, stop_at=0, resume=True))
-    a = torch.load(straight.out / "checkpoints" / "step_00000020.pt", weights_only=True)["model"]
-    b = torch.load(halves.out / "checkpoints" / "step_00000020.pt", weights_only=True)["model"]
+    a, b = straight_and_resumed_weights(straight, stop_at=10)
     assert any(k.endswith("film.weight") for k in a)
     assert all(torch.equal(a[k], b[k]) for k in a)
