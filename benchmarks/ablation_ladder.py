@@ -132,13 +132,19 @@ def score_only(args: argparse.Namespace) -> None:
     args.out.write_text(json.dumps(payload, indent=2) + "\n")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def run_parser(description: str, minutes: float) -> argparse.ArgumentParser:
+    """The options every equal-time training benchmark takes: data, work and output paths, cache, minutes."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--work", type=Path, required=True)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--cache", type=Path, default=None, help="frame and point cache (default: WORK/cache)")
-    parser.add_argument("--minutes", type=float, default=7.0)
+    parser.add_argument("--minutes", type=float, default=minutes)
+    return parser
+
+
+def main() -> None:
+    parser = run_parser(__doc__.splitlines()[0], 7.0)
     parser.add_argument("--steps", type=int, default=15_000, help="schedule length (lr decay) of every rung")
     parser.add_argument("--checkpoint-every", type=int, default=400)
     parser.add_argument("--objects", type=int, default=16, help="held-out validation objects scored")

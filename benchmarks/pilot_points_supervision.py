@@ -14,7 +14,6 @@ against the truth at the uniform share of each held-out object's point set.
 
 from __future__ import annotations
 
-import argparse
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -22,7 +21,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from ablation_ladder import warm_cache  # benchmarks/ is the script's folder, first on sys.path
+from ablation_ladder import run_parser, warm_cache  # benchmarks/ is the script's folder, first on sys.path
 
 from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData
@@ -72,12 +71,7 @@ def score(run: Path, config: TrainConfig, views: int, scale: float) -> dict[str,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, required=True)
-    parser.add_argument("--work", type=Path, required=True)
-    parser.add_argument("--out", type=Path, required=True)
-    parser.add_argument("--cache", type=Path, default=None, help="frame and point cache (default: WORK/cache)")
-    parser.add_argument("--minutes", type=float, default=8.0)
+    parser = run_parser(__doc__.splitlines()[0], 8.0)
     parser.add_argument("--weights", type=float, nargs="+", default=[1.0], help="points_weight of the later runs")
     parser.add_argument("--views", type=int, default=4, help="target views per held-out object")
     parser.add_argument("--scale", type=float, default=0.25)
