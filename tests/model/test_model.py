@@ -113,7 +113,7 @@ def test_every_config_kind_has_a_registered_model():
         build_model(replace(SMALL, kind="nerfacto"), 5)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize("kind", ["affnerf", "pixelnerf", "semantic-ray", "gsnerf"])
+@pytest.mark.parametrize("kind", ["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "pose-aware"])
 def test_point_geometry_of_several_objects_matches_each_objects_own_field(kind):
     from affnerf.model.registry import build_model
 

@@ -33,6 +33,8 @@ class AffNeRF(ConditionedNeRF):
         num_classes: affordance classes including background.
     """
 
+    needs_input_pose = False
+
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
         super().__init__()
         self.config = config

@@ -24,6 +24,8 @@ class ConditionedNeRF(nn.Module, ABC):
     config: ModelConfig
     num_classes: int
     renderer: FieldRenderer
+    #: Whether encoding needs the input views' poses (multi-view baselines) or only the images (AFF-NeRF).
+    needs_input_pose: bool = True
 
     @property
     def coarse(self) -> ConditionalField:
@@ -42,6 +44,10 @@ class ConditionedNeRF(nn.Module, ABC):
             intrinsics: (B, V, 4) the crops' (fl_x, fl_y, cx, cy).
             poses: (B, V, 4, 4) the views' camera-to-world poses.
         """
+
+    def auxiliary_losses(self, encoding: Any) -> dict[str, torch.Tensor]:
+        """Training losses the model adds to the rendering loss, by log name (each 0-d; none by default)."""
+        return {}
 
     @abstractmethod
     def condition(self, encoding: Any, ray_object: torch.Tensor) -> Condition:

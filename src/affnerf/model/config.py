@@ -21,8 +21,10 @@ class ModelConfig:
     Attributes:
         kind: ``affnerf`` (global shape and appearance codes, conventions §4), ``pixelnerf`` (the PixelNeRF-M
             baseline: pixel-aligned features projected with the input cameras), ``semantic-ray`` (the Semantic-Ray
-            baseline: Cross-Reprojection Attention over the posed input views) or ``gsnerf`` (the GSNeRF baseline:
-            per-view depth from a cost volume, depth-guided rendering; both conventions §4).
+            baseline: Cross-Reprojection Attention over the posed input views), ``gsnerf`` (the GSNeRF baseline:
+            per-view depth from a cost volume, depth-guided rendering; both conventions §4) or ``pose-aware``
+            (beyond the paper: AFF-NeRF's codes plus pixel-aligned features at an input camera the model predicts,
+            so it needs no pose either; :mod:`affnerf.model.pose_aware`).
         code_dim: size of the shape code and of the appearance code.
         encoder_width: channel multiplier of the two ResNet18 encoders (1.0 = standard ResNet18).
         encoder_resolution: side of the square object crop the encoders see, pixels.
@@ -51,7 +53,7 @@ class ModelConfig:
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
 
-    kind: Literal["affnerf", "pixelnerf", "semantic-ray", "gsnerf"] = "affnerf"
+    kind: Literal["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "pose-aware"] = "affnerf"
     code_dim: int = 32
     encoder_width: float = 1.0
     encoder_resolution: int = 224

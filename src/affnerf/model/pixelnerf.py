@@ -54,6 +54,24 @@ def project(points: torch.Tensor, w2c: torch.Tensor, intrinsics: torch.Tensor) -
     return cam, torch.stack([u, v], dim=-1)
 
 
+def stack_stages(stages: list[torch.Tensor]) -> torch.Tensor:
+    """ResNet stage outputs [(N, C_i, h_i, w_i)] -> (N, sum C_i, h_0, w_0): each upsampled to the first stage's size
+    and stacked, PixelNeRF's multi-scale feature map."""
+    size = stages[0].shape[-2:]
+    up = [F.interpolate(s, size=size, mode="bilinear", align_corners=False) for s in stages[1:]]
+    return torch.cat([stages[0], *up], 1)
+
+
+def sample_features(features: torch.Tensor, pixels: torch.Tensor, size: int) -> torch.Tensor:
+    """Bilinear read of a (C, h, w) feature map covering an S x S crop at (N, 2) crop pixel coordinates -> (N, C).
+
+    Coordinates outside the crop read its border.
+    """
+    grid = (pixels / size * 2.0 - 1.0)[None, :, None, :]
+    feat = F.grid_sample(features[None], grid, mode="bilinear", padding_mode="border", align_corners=False)
+    return feat[0, :, :, 0].T
+
+
 class PixelNeRF(ConditionedNeRF):
     """Pixel-aligned image features conditioning a radiance field with an affordance head.
 
@@ -79,11 +97,7 @@ class PixelNeRF(ConditionedNeRF):
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> PixelEncoding:
         """Feature maps of (B, V, 3, S, S) crops, with their cameras."""
         b, v = images.shape[:2]
-        stages = self.backbone(images.reshape(b * v, *images.shape[2:]))
-        size = stages[0].shape[-2:]
-        stacked = torch.cat(
-            [stages[0]] + [F.interpolate(s, size=size, mode="bilinear", align_corners=False) for s in stages[1:]], 1
-        )
+        stacked = stack_stages(self.backbone(images.reshape(b * v, *images.shape[2:])))
         return PixelEncoding(
             features=stacked.reshape(b, v, *stacked.shape[1:]),
             intrinsics=intrinsics,
@@ -96,11 +110,7 @@ class PixelNeRF(ConditionedNeRF):
         views = []
         for v in range(encoding.features.shape[1]):
             cam, pix = project(points, encoding.world_to_camera[b, v], encoding.intrinsics[b, v])
-            grid = (pix / encoding.size * 2.0 - 1.0)[None, :, None, :]
-            feat = F.grid_sample(
-                encoding.features[b, v][None], grid, mode="bilinear", padding_mode="border", align_corners=False
-            )
-            feat = feat[0, :, :, 0].T  # (N, C)
+            feat = sample_features(encoding.features[b, v], pix, encoding.size)
             views.append(self.view_net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
         return torch.stack(views).mean(0)
 

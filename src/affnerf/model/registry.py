@@ -14,6 +14,7 @@ from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.gsnerf import GSNeRF
 from affnerf.model.pixelnerf import PixelNeRF
+from affnerf.model.pose_aware import PoseAwareNeRF
 from affnerf.model.semantic_ray import SemanticRay
 
 #: Kind name -> model class.
@@ -22,6 +23,7 @@ MODEL_KINDS: dict[str, type[ConditionedNeRF]] = {
     "pixelnerf": PixelNeRF,
     "semantic-ray": SemanticRay,
     "gsnerf": GSNeRF,
+    "pose-aware": PoseAwareNeRF,
 }
 
 

@@ -92,13 +92,14 @@ class Predictor:
 
     @classmethod
     def load(cls, path: Path, device: str = "auto", chunk: int = RAYS_PER_CHUNK, **options: object) -> Predictor:
-        """Load from a run folder or checkpoint file (an AFF-NeRF: prediction from a photo needs no pose)."""
+        """Load from a run folder or checkpoint file (an AFF-NeRF or pose-aware model: prediction from a photo needs
+        no pose)."""
         loaded = load_model(Path(path), pick_device(device))
-        if loaded.model.config.kind != "affnerf":
+        if loaded.model.needs_input_pose:
             raise input_error(
                 loaded.path,
                 f"a {loaded.model.config.kind} model needs the input camera's pose; "
-                "predict from photos with an AFF-NeRF run",
+                "predict from photos with an AFF-NeRF (or pose-aware) run",
             )
         return cls(loaded, chunk, **options)  # type: ignore[arg-type]
 

@@ -144,15 +144,16 @@ class TrainingPass(torch.nn.Module):
 
     def forward(
         self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
-    ) -> tuple[RayOutputs, RayOutputs | None, list[tuple[torch.Tensor, torch.Tensor]] | None]:
-        """(coarse, fine, per-field (density, logits) at the points or None), as ``model.forward`` + points."""
+    ) -> tuple[RayOutputs, RayOutputs | None, list[tuple[torch.Tensor, torch.Tensor]] | None, dict[str, torch.Tensor]]:
+        """(coarse, fine, per-field (density, logits) at the points or None, the model's auxiliary losses), as
+        ``model.forward`` + points."""
         m = self.model
         encoding = m.encode_views(batch.images, batch.input_intrinsics, batch.input_poses)
         coarse, fine = m.render_rays(
             encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
         )
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
-        return coarse, fine, geometry
+        return coarse, fine, geometry, m.auxiliary_losses(encoding)
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
@@ -273,7 +274,8 @@ class Trainer:
         fine from the B objects' encoded views, back-propagates the loss and steps Adam. Returns 0-d detached
         tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
         finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
-        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field.
+        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field; and the model's
+        auxiliary losses (the pose-aware model's ``loss/camera``).
         """
         config, state = self.config, self.state
         lr = learning_rate(config, step)
@@ -297,7 +299,7 @@ class Trainer:
     def _loss(self, batch: RayBatch, points: PointBatch | None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         """The step's total loss and its detached parts (see :meth:`train_iteration`)."""
         config = self.config
-        coarse, fine, geometry = self.net(batch, self.state.generator, points)
+        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points)
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
         parts = {
@@ -306,6 +308,9 @@ class Trainer:
             "train/affordance_accuracy": (final.affordance.detach().argmax(-1) == batch.labels).float().mean(),
         }
         total = terms.total
+        for name, term in auxiliary.items():  # the model's own losses (the pose-aware camera head's), weight 1
+            parts[name] = term.detach()
+            total = total + term
         if config.mask_weight > 0 or config.depth_weight > 0:
             stages = [coarse] if fine is None else [coarse, fine]
             rays = ray_geometry_loss(stages, batch.labels, batch.depth, config.mask_weight, config.depth_weight)

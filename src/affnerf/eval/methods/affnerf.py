@@ -117,6 +117,13 @@ register_method(
 )
 register_method(
     MethodSpec(
+        "pose-aware",
+        _build("pose-aware"),
+        "AFF-NeRF, pose-aware: global codes plus pixel-aligned features at the input camera it predicts",
+    )
+)
+register_method(
+    MethodSpec(
         "semantic-ray",
         _build("semantic-ray"),
         "Semantic-Ray: Cross-Reprojection Attention over the posed input views (baseline)",
