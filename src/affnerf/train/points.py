@@ -16,7 +16,8 @@ meshes are often open or inconsistently oriented) use the parity of the crossing
 there, a region enclosed twice by overlapping parts counts as outside, and open sheets enclose nothing.
 
 The nearest face is that of the nearest of :data:`SURFACE_SAMPLES` area-weighted surface samples (about 1 mm apart
-on a 0.44 m object), so labels are exact up to the sample spacing.
+on a 0.44 m object), so labels are exact up to the sample spacing; points deeper inside than the band use every
+:data:`DEEP_STRIDE`-th sample (about 3 mm apart), which only matters where two parts are nearly equidistant.
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ POINT_SET_SIZE = 65536
 UNIFORM_SHARE = 0.25
 #: Surface samples whose faces stand for the nearest face.
 SURFACE_SAMPLES = 200_000
+#: Points deeper inside than :data:`LABEL_BAND` take the label of the nearest of every DEEP_STRIDE-th sample.
+DEEP_STRIDE = 8
 #: Points outside the object farther than this from its surface (metres) get no affordance target.
 LABEL_BAND = 0.01
 
@@ -138,7 +141,10 @@ def nearest_labels(
     labels[near] = face_labels[faces[index[near]]]
     deep = inside & ~near  # inside, but farther from the surface than the band: no early exit
     if deep.any():
-        labels[deep] = face_labels[faces[tree.query(points[deep])[1]]]
+        # Deep inside a round part, every surface sample is nearly equidistant and an exact k-d tree query visits
+        # most of them; every DEEP_STRIDE-th sample answers which part a deep point belongs to ~10x faster.
+        coarse = cKDTree(samples[::DEEP_STRIDE])
+        labels[deep] = face_labels[faces[::DEEP_STRIDE][coarse.query(points[deep])[1]]]
     return labels
 
 
