@@ -6,9 +6,9 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from support import TINY_MODEL
 
 from affnerf.data.generate import GenerateConfig, generate_dataset
-from affnerf.model.config import ModelConfig
 from affnerf.train.config import SMALL, TrainConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -42,22 +42,6 @@ def tiny_dataset(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("tiny") / "ds"
     generate_dataset(_tiny_config(root), progress=False)
     return root
-
-
-#: A model small enough to train for a few steps in a test.
-TINY_MODEL = ModelConfig(
-    encoder_width=0.125,
-    encoder_resolution=32,
-    field_width=32,
-    field_depth=2,
-    color_width=16,
-    affordance_width=16,
-    pe_xyz=6,
-    pe_dir=2,
-    num_coarse=16,
-    num_fine=16,
-    clip_to_cube=True,
-)
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,5 @@
-"""Helpers the tests import (``pythonpath = ["tests"]`` in pyproject.toml): command lines of tiny runs."""
+"""Helpers the tests import (``pythonpath = ["tests"]`` in pyproject.toml): the tiny model, command lines of tiny
+runs."""
 
 from __future__ import annotations
 
@@ -6,7 +7,23 @@ from dataclasses import fields
 
 import torch
 
+from affnerf.model.config import ModelConfig
 from affnerf.train.config import SMALL, TrainConfig
+
+#: A model small enough to train for a few steps in a test.
+TINY_MODEL = ModelConfig(
+    encoder_width=0.125,
+    encoder_resolution=32,
+    field_width=32,
+    field_depth=2,
+    color_width=16,
+    affordance_width=16,
+    pe_xyz=6,
+    pe_dir=2,
+    num_coarse=16,
+    num_fine=16,
+    clip_to_cube=True,
+)
 
 #: Training options beyond the paper that the ``small`` preset turns on and tiny test runs may turn off.
 LOSS_OPTIONS = ("points_weight", "mask_weight", "depth_weight", "affordance_balance", "input_jitter")

@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import torch
+from support import TINY_MODEL
 
 from affnerf.data.cameras import look_at
 from affnerf.model.camera_head import (
@@ -18,22 +19,10 @@ from affnerf.model.camera_head import (
     camera_loss,
     params_from_camera,
 )
-from affnerf.model.config import ModelConfig
 from affnerf.model.pixelnerf import project, sample_features
 from affnerf.model.pose_aware import PoseAwareNeRF
 
-TINY = ModelConfig(
-    kind="pose-aware",
-    encoder_width=0.125,
-    encoder_resolution=32,
-    field_width=32,
-    field_depth=4,
-    num_coarse=8,
-    num_fine=8,
-    clip_to_cube=True,
-    color_width=16,
-    affordance_width=16,
-)
+TINY = replace(TINY_MODEL, kind="pose-aware")
 
 
 def test_a_camera_on_the_x_axis_has_the_hand_computed_vector():
@@ -119,7 +108,7 @@ def test_a_pose_aware_run_trains_logs_its_camera_loss_and_predicts_from_a_photo(
     from affnerf.predict.predictor import Predictor
     from affnerf.train.trainer import train
 
-    config = tiny_train_config(model=replace(TINY, encoder_resolution=32), steps=6, checkpoint_every=6)
+    config = tiny_train_config(model=TINY, steps=6, checkpoint_every=6)
     summary = train(config)
     assert summary.step == 6 and "loss/camera" in summary.scalars
     log = (config.out / "metrics.jsonl").read_text()

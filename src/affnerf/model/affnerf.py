@@ -36,9 +36,7 @@ class AffNeRF(ConditionedNeRF):
     needs_input_pose = False
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config = config
-        self.num_classes = num_classes
+        super().__init__(config, num_classes)
         self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width)
         self.appearance_encoder = CodeEncoder(config.code_dim, config.encoder_width)
         self.renderer = FieldRenderer(config, num_classes, config.code_dim, config.code_dim)

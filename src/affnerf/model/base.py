@@ -27,6 +27,11 @@ class ConditionedNeRF(nn.Module, ABC):
     #: Whether encoding needs the input views' poses (multi-view baselines) or only the images (AFF-NeRF).
     needs_input_pose: bool = True
 
+    def __init__(self, config: ModelConfig, num_classes: int) -> None:
+        super().__init__()
+        self.config = config
+        self.num_classes = num_classes
+
     @property
     def coarse(self) -> ConditionalField:
         return self.renderer.coarse

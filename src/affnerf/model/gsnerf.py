@@ -197,9 +197,7 @@ class GSNeRF(MultiViewNeRF):
     """
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config = config
-        self.num_classes = num_classes
+        super().__init__(config, num_classes)
         self.backbone = ResNet18(config.encoder_width, stages=3)
         feat = sum(self.backbone.channels)
         dim = 2 * config.code_dim

@@ -9,6 +9,7 @@ cameras' poses.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import torch
@@ -72,6 +73,21 @@ def sample_features(features: torch.Tensor, pixels: torch.Tensor, size: int) -> 
     return feat[0, :, :, 0].T
 
 
+def per_object(
+    point_object: torch.Tensor,
+    points: torch.Tensor,
+    width: int,
+    fn: Callable[[int, torch.Tensor], torch.Tensor],
+) -> torch.Tensor:
+    """(N, width): ``fn(b, points of object b)`` -> (N_b, width) for each object b among the (N,) ``point_object``,
+    placed back in the points' order."""
+    out = points.new_zeros(len(points), width)
+    for b in torch.unique(point_object).tolist():
+        sel = point_object == b
+        out[sel] = fn(b, points[sel])
+    return out
+
+
 class PixelNeRF(ConditionedNeRF):
     """Pixel-aligned image features conditioning a radiance field with an affordance head.
 
@@ -81,9 +97,7 @@ class PixelNeRF(ConditionedNeRF):
     """
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config = config
-        self.num_classes = num_classes
+        super().__init__(config, num_classes)
         self.backbone = ResNet18(config.encoder_width, stages=3)
         self.feature_dim = sum(self.backbone.channels)
         cond = 2 * config.code_dim
@@ -118,11 +132,8 @@ class PixelNeRF(ConditionedNeRF):
         """Each point takes the averaged projected features of its object's input views (trunk and colour)."""
 
         def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-            obj = ray_object[rays]
-            out = points.new_zeros(len(points), self.view_net[-1].out_features)
-            for b in torch.unique(obj).tolist():
-                sel = obj == b
-                out[sel] = self._object_condition(encoding, b, points[sel])
+            width = self.view_net[-1].out_features
+            out = per_object(ray_object[rays], points, width, lambda b, p: self._object_condition(encoding, b, p))
             return out, out
 
         return cond

@@ -33,7 +33,7 @@ from affnerf.model.camera_head import (
 )
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
-from affnerf.model.pixelnerf import VIEW_PE, project, sample_features, stack_stages
+from affnerf.model.pixelnerf import VIEW_PE, per_object, project, sample_features, stack_stages
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.model.resnet import CodeEncoder, ResNet18
 
@@ -74,9 +74,7 @@ class PoseAwareNeRF(ConditionedNeRF):
     needs_input_pose = False
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config = config
-        self.num_classes = num_classes
+        super().__init__(config, num_classes)
         self.shape_backbone = ResNet18(config.encoder_width)
         pooled = self.shape_backbone.channels[-1]
         self.shape_head = nn.Linear(pooled, config.code_dim)
@@ -150,10 +148,7 @@ class PoseAwareNeRF(ConditionedNeRF):
 
         def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
             obj = ray_object[rays]
-            local = points.new_zeros(len(points), self.config.code_dim)
-            for b in torch.unique(obj).tolist():
-                sel = obj == b
-                local[sel] = self._local_code(encoding, b, points[sel])
+            local = per_object(obj, points, self.config.code_dim, lambda b, p: self._local_code(encoding, b, p))
             pick = torch.nn.functional.one_hot(obj, encoding.shape.shape[0]).to(local.dtype)
             return torch.cat([pick @ encoding.shape, local], -1), torch.cat([pick @ encoding.appearance, local], -1)
 

@@ -86,9 +86,7 @@ class SemanticRay(MultiViewNeRF):
     """
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config = config
-        self.num_classes = num_classes
+        super().__init__(config, num_classes)
         self.backbone = ResNet18(config.encoder_width, stages=3)
         dim = 2 * config.code_dim
         self.dim = dim
