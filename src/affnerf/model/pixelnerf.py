@@ -73,6 +73,33 @@ def sample_features(features: torch.Tensor, pixels: torch.Tensor, size: int) -> 
     return feat[0, :, :, 0].T
 
 
+def pixel_aligned_code(
+    net: nn.Module,
+    features: torch.Tensor,
+    world_to_camera: torch.Tensor,
+    intrinsics: torch.Tensor,
+    size: int,
+    points: torch.Tensor,
+) -> torch.Tensor:
+    """Mean over V views of ``net``(feature read where each point projects, PE of its camera-frame position).
+
+    Args:
+        net: (C + PE dims) -> code MLP.
+        features: (V, C, h, w) feature maps of one object's S x S crops.
+        world_to_camera: (V, 4, 4); intrinsics: (V, 4) crop intrinsics; size: S.
+        points: (N, 3) canonical positions.
+
+    Returns:
+        (N, code) codes.
+    """
+    codes = []
+    for v in range(features.shape[0]):
+        cam, pix = project(points, world_to_camera[v], intrinsics[v])
+        feat = sample_features(features[v], pix, size)
+        codes.append(net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
+    return torch.stack(codes).mean(0)
+
+
 def per_object(
     point_object: torch.Tensor,
     points: torch.Tensor,
@@ -121,12 +148,8 @@ class PixelNeRF(ConditionedNeRF):
 
     def _object_condition(self, encoding: PixelEncoding, b: int, points: torch.Tensor) -> torch.Tensor:
         """(N, cond) mean over object b's input views of the projected features of (N, 3) points."""
-        views = []
-        for v in range(encoding.features.shape[1]):
-            cam, pix = project(points, encoding.world_to_camera[b, v], encoding.intrinsics[b, v])
-            feat = sample_features(encoding.features[b, v], pix, encoding.size)
-            views.append(self.view_net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
-        return torch.stack(views).mean(0)
+        e = encoding
+        return pixel_aligned_code(self.view_net, e.features[b], e.world_to_camera[b], e.intrinsics[b], e.size, points)
 
     def condition(self, encoding: PixelEncoding, ray_object: torch.Tensor) -> Condition:
         """Each point takes the averaged projected features of its object's input views (trunk and colour)."""

@@ -32,8 +32,8 @@ from affnerf.model.camera_head import (
     params_from_camera,
 )
 from affnerf.model.config import ModelConfig
-from affnerf.model.encoding import encoding_dim, positional_encoding
-from affnerf.model.pixelnerf import VIEW_PE, per_object, project, sample_features, stack_stages
+from affnerf.model.encoding import encoding_dim
+from affnerf.model.pixelnerf import VIEW_PE, per_object, pixel_aligned_code, stack_stages
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.model.resnet import CodeEncoder, ResNet18
 
@@ -136,12 +136,8 @@ class PoseAwareNeRF(ConditionedNeRF):
 
     def _local_code(self, encoding: PoseAwareCodes, b: int, points: torch.Tensor) -> torch.Tensor:
         """(N, code_dim): mean over object b's views of the local code of (N, 3) points."""
-        codes = []
-        for v in range(encoding.features.shape[1]):
-            cam, pix = project(points, encoding.world_to_camera[b, v], encoding.intrinsics[b, v])
-            feat = sample_features(encoding.features[b, v], pix, encoding.size)
-            codes.append(self.local_net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
-        return torch.stack(codes).mean(0)
+        e = encoding
+        return pixel_aligned_code(self.local_net, e.features[b], e.world_to_camera[b], e.intrinsics[b], e.size, points)
 
     def condition(self, encoding: PoseAwareCodes, ray_object: torch.Tensor) -> Condition:
         """Trunk: (shape code, local code); colour head: (appearance code, local code)."""
