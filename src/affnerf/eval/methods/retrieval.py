@@ -56,10 +56,10 @@ def bank_entries(dataset: Dataset, categories: list[str] | str | None) -> list[I
 
 
 class RetrievalMethod:
-    """Nearest training object by AFF-NeRF shape code (L2), rendered from the target cameras.
+    """Nearest training object by shape code (L2; AFF-NeRF or pose-aware), rendered from the target cameras.
 
     Args:
-        loaded: a trained AFF-NeRF (its shape encoder embeds the images).
+        loaded: a trained pose-free model, AFF-NeRF or pose-aware (its shape code embeds the images).
         dataset: the dataset holding the training objects and their ``mesh.ply``.
         categories: restrict the bank to these categories (a list or comma-separated text; None = every training
             object).
@@ -75,8 +75,8 @@ class RetrievalMethod:
         categories: list[str] | str | None = None,
         views_per_object: int = 4,
     ) -> None:
-        if loaded.model.config.kind != "affnerf":
-            raise ValueError("retrieval embeds images with an AFF-NeRF's shape encoder")
+        if loaded.model.needs_input_pose:
+            raise ValueError("retrieval embeds images with the shape code of a pose-free model (AFF-NeRF, pose-aware)")
         self.loaded, self.dataset = loaded, dataset
         self.views_per_object = views_per_object
         self.entries: list[IndexEntry] = bank_entries(dataset, categories)
