@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import hashlib
+import pickle
+import subprocess
+import sys
 from collections import OrderedDict
 
 import numpy as np
@@ -13,6 +16,9 @@ from affnerf.errors import AffnerfError
 _MAX_PIECES = 256  #: meshes with more connected pieces than this are decomposed as a whole
 _CACHE_SIZE = 64  #: decompositions kept by :func:`convex_parts`
 _CACHE: OrderedDict[str, tuple[trimesh.Trimesh, ...]] = OrderedDict()
+#: The command that runs one CoACD decomposition in a child process (:mod:`affnerf.grasp.coacd_worker`).
+WORKER = [sys.executable, "-m", "affnerf.grasp.coacd_worker"]
+WORKER_TIMEOUT = 600.0  #: seconds one decomposition may take before its piece falls back to the hull
 
 
 def convex_parts(mesh: trimesh.Trimesh, threshold: float = 0.08, max_parts: int = 16) -> list[trimesh.Trimesh]:
@@ -21,8 +27,10 @@ def convex_parts(mesh: trimesh.Trimesh, threshold: float = 0.08, max_parts: int 
 
     When every connected piece is closed (as given, or after merging duplicate vertices), each piece is
     decomposed on its own, else the mesh as a whole (CoACD remeshes it). A piece that is nearly convex, small or
-    that CoACD fails on becomes its convex hull; flat pieces are dropped. A typical object (0.1-0.44 m, a few
-    thousand faces) takes well under a few seconds, a large thin-walled one (30k faces) ten or more.
+    that CoACD fails on becomes its convex hull; flat pieces are dropped. CoACD runs in a child process
+    (:func:`coacd_parts`), so that when it aborts (it does on some meshes) only that piece falls back to its hull.
+    A typical object (0.1-0.44 m, a few thousand faces) takes well under a few seconds, a large thin-walled one
+    (30k faces) ten or more.
 
     Args:
         mesh: the mesh.
@@ -80,26 +88,44 @@ def _decompose_piece(piece: trimesh.Trimesh, threshold: float, max_parts: int, s
     convex = piece.is_volume and piece.volume >= 0.98 * hull.volume
     if convex or len(piece.faces) < 8 or np.max(piece.extents) < 0.05 * size:
         return [hull]
-    try:
-        import coacd
-
-        coacd.set_log_level("error")
-        raw = coacd.run_coacd(
-            coacd.Mesh(np.asarray(piece.vertices, np.float64), np.asarray(piece.faces, np.int32)),
-            threshold=threshold,
-            max_convex_hull=max_parts,
-            preprocess_mode="auto",
-            preprocess_resolution=40,
-            resolution=1000,
-            mcts_nodes=10,
-            mcts_iterations=30,
-            mcts_max_depth=2,
-            seed=0,
-        )
-    except Exception:  # noqa: BLE001 - any CoACD failure falls back to the hull
+    raw = coacd_parts(
+        piece,
+        threshold=threshold,
+        max_convex_hull=max_parts,
+        # CoACD's "auto" mode checks manifoldness itself, and that check aborts on some closed meshes (a bottle of
+        # the procedural test split): a closed piece needs no remeshing, an open mesh does
+        preprocess_mode="off" if piece.is_watertight else "on",
+        preprocess_resolution=40,
+        resolution=1000,
+        mcts_nodes=10,
+        mcts_iterations=30,
+        mcts_max_depth=2,
+        seed=0,
+    )
+    if raw is None:
         return [hull]
-    parts = [part for part in (_hull(vertices) for vertices, _ in raw if len(vertices) >= 4) if part is not None]
+    parts = [part for part in (_hull(vertices) for vertices in raw if len(vertices) >= 4) if part is not None]
     return parts or [hull]
+
+
+def coacd_parts(mesh: trimesh.Trimesh, **kwargs: object) -> list[np.ndarray] | None:
+    """The vertices of each convex part CoACD finds for ``mesh`` (``kwargs``: :func:`coacd.run_coacd`'s options),
+    computed in a child process (:data:`WORKER`); None when CoACD fails, aborts or takes over
+    :data:`WORKER_TIMEOUT` seconds."""
+    request = pickle.dumps(
+        (np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int32), kwargs), pickle.HIGHEST_PROTOCOL
+    )
+    try:
+        done = subprocess.run(WORKER, input=request, capture_output=True, timeout=WORKER_TIMEOUT, check=False)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    if done.returncode != 0:
+        return None
+    try:
+        parts = pickle.loads(done.stdout)  # noqa: S301 - our own child's answer
+    except Exception:  # noqa: BLE001 - a truncated or garbled answer counts as a failure
+        return None
+    return parts if isinstance(parts, list) else None
 
 
 def mass_properties(parts: list[trimesh.Trimesh], mass: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
