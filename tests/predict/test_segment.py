@@ -134,3 +134,18 @@ def test_when_the_salient_model_and_grabcut_disagree_auto_takes_grabcut_and_reco
     swapped = segment.salient_segmentation(rgb, model=_WrongModel(), use_grabcut_on_disagreement=True)
     assert swapped.source == "grabcut" and swapped.compared_with == "salient" and swapped.agreement == kept.agreement
     assert segment.mask_iou(swapped.mask, truth) > 0.8
+
+
+@needs_opencv
+def test_grabcut_gives_the_same_mask_whatever_opencvs_random_state():
+    """GrabCut's colour models start from k-means++ on OpenCV's process-wide generator: without seeding it, a photo's
+    mask depended on the GrabCuts run before it (here 3 pixels of this photo differ between two states)."""
+    import cv2
+    import skimage.data
+
+    photo = np.ascontiguousarray(skimage.data.coffee()[::4, ::4])
+    masks = []
+    for state in (1, 2, 3):
+        cv2.setRNGSeed(state)  # what earlier GrabCuts would have left behind
+        masks.append(segment.grabcut_mask(photo))
+    assert masks[0].any() and all((m == masks[0]).all() for m in masks[1:])
