@@ -83,3 +83,52 @@ def test_summary_ratios_shares_and_objects_without_grasps():
         f"| True mesh, task part only | {ratio} | {ratio} |" in table
         and "| True mesh, whole surface | 1.00 | 1.00 |" in table
     )
+
+
+def test_a_meshs_two_rows_average_over_the_same_categories():
+    empty = _cond([], [], [])
+    objects = [
+        {  # the predicted part has no grasp on the cabinet: its shares are undefined there
+            "category": "cabinet",
+            "true_whole": _cond([0.1], [False], [False]),
+            "true_part": _cond([0.1], [True], [False]),
+            "predicted_whole": _cond([0.1], [False], [False]),
+            "predicted_part": empty,
+        },
+        {
+            "category": "pen",
+            "true_whole": _cond([0.2], [True], [True]),
+            "true_part": _cond([0.2], [True], [True]),
+            "predicted_whole": _cond([0.2], [True], [True]),
+            "predicted_part": _cond([0.2], [True], [True]),
+        },
+    ]
+    s = summarise(objects)
+    # the predicted whole surface's 0% on the cabinet would make it look worse than the part, which has no number
+    assert s["mean"]["predicted_whole"]["lift_success"] == 1.0 and s["mean"]["predicted_part"]["lift_success"] == 1.0
+    assert s["mean"]["predicted_whole"]["left_out"]["lift_success"] == ["cabinet"]
+    assert s["mean"]["true_whole"]["lift_success"] == 0.5 and "lift_success" not in s["mean"]["true_whole"]["left_out"]
+    assert s["mean"]["predicted_part"]["epsilon"] == pytest.approx(0.1)  # ε counts 0 for no grasp: every category
+    assert s["categories"]["cabinet"]["predicted_part"]["no_grasp_objects"] == 1
+    assert s["mean"]["predicted_part"]["no_grasp_objects"] == 1 and s["mean"]["predicted_part"]["objects"] == 2
+    table = table3_markdown(s, {"split": "test"})
+    assert "leave out the categories where one row of the same mesh has no grasp (predicted mesh: cabinet)" in table
+    assert f"| {LABELS['predicted_part']} | 1/1 | 0/1 | 1/2 |" in table
+
+
+def test_no_grasp_says_the_narrowest_width_against_the_opening():
+    import trimesh
+
+    from affnerf.eval.grasps import _plan
+    from affnerf.grasp.gripper import ParallelJawGripper
+    from affnerf.grasp.planner import PlanConfig
+    from affnerf.grasp.refine import RefineConfig
+    from affnerf.grasp.target import GraspObject
+    from affnerf.vocab import affordance_id
+
+    body = trimesh.creation.cylinder(radius=0.06, height=0.2, sections=48)  # 0.12 m across, wider than 0.08 m
+    obj = GraspObject(body.vertices, body.faces, np.full(len(body.faces), affordance_id("grasp")), "bottle")
+    config = PlanConfig(affordance="grasp", num=4, refine=RefineConfig(steps=0))
+    grasps, why = _plan(obj, config, ParallelJawGripper(), "transforms.json scale")
+    assert grasps == [] and why.startswith("no grasp found: the narrowest section of the 'grasp' surface is 0.1")
+    assert "wider than the gripper's 0.080 m opening" in why

@@ -47,12 +47,13 @@ def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
     success rate in physics and, beside it, lift-and-disturb success. Writes OUT/table3.md, OUT/grasp_metrics.json
     and OUT/grasp_objects.json.
     """
+    from affnerf.eval.grasp_table import METRICS
     from affnerf.eval.grasps import run_grasp_eval
 
     summary = run_grasp_eval(config)
     for cond, m in summary["mean"].items():
-        parts = [f"{k} {v:.4f}" for k, v in m.items() if v is not None]
-        print(f"{cond}: " + ", ".join(parts))
+        parts = [f"{k} {m[k]:.4f}" for k in METRICS if m.get(k) is not None]
+        print(f"{cond}: " + ", ".join(parts) + f"; no grasp on {m['no_grasp_objects']}/{m['objects']} objects")
     print(f"-> {config.out / 'table3.md'}")
 
 

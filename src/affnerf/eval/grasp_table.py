@@ -41,6 +41,16 @@ def whole_of(condition: str) -> str:
     return condition.split("_")[0] + "_whole"
 
 
+def same_mesh(condition: str) -> tuple[str, str]:
+    """Both conditions planned on the mesh of ``condition``, whole surface first.
+
+    >>> same_mesh("true_whole")
+    ('true_whole', 'true_part')
+    """
+    mesh = condition.split("_")[0]
+    return f"{mesh}_whole", f"{mesh}_part"
+
+
 def _mean(values: list) -> float | None:
     return float(np.mean(values)) if len(values) else None
 
@@ -59,13 +69,19 @@ def _cell(rows: list[dict[str, Any]], cond: str) -> dict[str, Any]:
         "disturb_success": _mean([x for o in rows for x in o[cond].get("disturb", [])]),
         "grasps": int(sum(o[cond]["grasps"] for o in rows)),
         "objects": len(rows),
+        "no_grasp_objects": sum(1 for o in rows if not o[cond]["grasps"]),
     }
 
 
 def summarise(objects: list[dict[str, Any]]) -> dict[str, Any]:
     """Per category and condition: mean epsilon, its ratio to the whole surface on the same mesh, the share of
-    grasps with both contacts on the true task part, lift (and disturb) success, grasps and objects; and the mean
-    over categories (its ratio is the ratio of the mean epsilons)."""
+    grasps with both contacts on the true task part, lift (and disturb) success, grasps, objects and objects
+    without grasps; and the mean over categories (its ratio is the ratio of the mean epsilons).
+
+    A share or success rate is undefined in a category where a condition has no grasp. So that the two rows of
+    a mesh stay comparable, their means cover the same categories: those where both are defined; the others are
+    listed in ``mean[cond]["left_out"][metric]``.
+    """
     out: dict[str, Any] = {"categories": {}, "mean": {}}
     cats = sorted({o["category"] for o in objects})
     for cat in cats:
@@ -75,10 +91,14 @@ def summarise(objects: list[dict[str, Any]]) -> dict[str, Any]:
             cell["epsilon_ratio"] = _ratio(cell["epsilon"], cells[whole_of(cond)]["epsilon"])
         out["categories"][cat] = cells
     for cond in CONDITIONS:
-        mean = {}
+        mean: dict[str, Any] = {"left_out": {}}
         for key in ("epsilon", "on_part_share", "lift_success", "disturb_success"):
-            vals = [out["categories"][c][cond][key] for c in cats if out["categories"][c][cond][key] is not None]
-            mean[key] = _mean(vals)
+            both = [c for c in cats if all(out["categories"][c][x][key] is not None for x in same_mesh(cond))]
+            mean[key] = _mean([out["categories"][c][cond][key] for c in both])
+            if len(both) < len(cats):
+                mean["left_out"][key] = [c for c in cats if c not in both]
+        mean["objects"] = sum(out["categories"][c][cond]["objects"] for c in cats)
+        mean["no_grasp_objects"] = sum(out["categories"][c][cond]["no_grasp_objects"] for c in cats)
         out["mean"][cond] = mean
     for cond in CONDITIONS:
         out["mean"][cond]["epsilon_ratio"] = _ratio(
@@ -111,22 +131,38 @@ def _fmt(key: str, value: float | None) -> str:
     return f"{value:.4f}" if key == "epsilon" else (f"{value:.2f}" if key == "epsilon_ratio" else f"{100 * value:.0f}%")
 
 
+def _left_out_note(summary: dict[str, Any], key: str) -> list[str]:
+    """A line naming the categories a mesh's average leaves out for ``key`` (none: no line)."""
+    notes = []
+    for mesh in MESHES:
+        mean = summary["mean"][f"{mesh}_whole"]
+        left = mean.get("left_out", {}).get(key)
+        if left and mean[key] is not None:  # not when no category has the metric (e.g. --no-disturb)
+            notes.append(f"{mesh} mesh: {', '.join(left)}")
+    if not notes:
+        return []
+    return [f"Averages leave out the categories where one row of the same mesh has no grasp ({'; '.join(notes)}).", ""]
+
+
 def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
     """Markdown of the 2×2: one table per metric, rows = conditions, columns = categories and their average."""
     cats = sorted(summary["categories"])
+    header = ["| | " + " | ".join(cats) + " | Average |", "|" + " --- |" * (len(cats) + 2)]
     lines = [f"# Grasps on {context.get('split', 'test')} objects: true or predicted mesh × whole surface or part", ""]
     lines += [f"Every grasp is scored on the true mesh. ε: {epsilon_convention()}.", ""]
     for key in METRICS:
-        lines += [
-            f"**{_TITLES[key]}**",
-            "",
-            "| | " + " | ".join(cats) + " | Average |",
-            "|" + " --- |" * (len(cats) + 2),
-        ]
+        lines += [f"**{_TITLES[key]}**", "", *header]
         for cond in CONDITIONS:
             cells = [summary["categories"][c][cond][key] for c in cats] + [summary["mean"][cond][key]]
             lines.append(f"| {LABELS[cond]} | " + " | ".join(_fmt(key, v) for v in cells) + " |")
-        lines.append("")
+        lines += ["", *_left_out_note(summary, key)]
+    lines += ["**Objects where planning found no grasp** (last column: all objects; `grasp_objects.json` says why)"]
+    lines += ["", *header]
+    for cond in CONDITIONS:
+        cells = [summary["categories"][c][cond] for c in cats] + [summary["mean"][cond]]
+        counts = [f"{cell.get('no_grasp_objects', 0)}/{cell.get('objects', 0)}" for cell in cells]
+        lines.append(f"| {LABELS[cond]} | " + " | ".join(counts) + " |")
+    lines.append("")
     objects = {c: summary["categories"][c]["true_whole"]["objects"] for c in cats}
     lines += [f"Objects per category: {objects}. Settings: `{context}`", ""]
     return "\n".join(lines)

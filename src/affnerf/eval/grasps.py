@@ -23,6 +23,7 @@ from affnerf.errors import AffnerfError
 from affnerf.eval.grasp_table import CONDITIONS, summarise, table3_markdown, task_affordance
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
+from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
@@ -117,23 +118,35 @@ def _lift(gt: GraspObject, grasps: list[Grasp], count: int, mass: float, disturb
     return [bool(lift.success) for lift, _ in results], [bool(d is not None and d.held) for _, d in results]
 
 
-def _plan(mesh: GraspObject, config: PlanConfig, gripper: ParallelJawGripper) -> tuple[list[Grasp], str | None]:
-    """Grasps planned on ``mesh``, and why there are none (None when there are some)."""
+def _plan(
+    mesh: GraspObject, config: PlanConfig, gripper: ParallelJawGripper, size_source: str
+) -> tuple[list[Grasp], str | None]:
+    """Grasps planned on ``mesh``, and why there are none (None when there are some): for a surface the planner
+    found nothing on, the narrowest width of the allowed surface against the gripper's opening
+    (:func:`~affnerf.grasp.explain.explain_no_grasps`)."""
     if not len(mesh.faces):
         return [], "no predicted surface"
     try:
         grasps = plan_grasps(mesh, config, gripper)
     except AffnerfError as e:  # e.g. the prediction has no surface of the task's affordance
         return [], str(e)
-    return grasps, None if grasps else "no grasp survived planning"
+    if grasps:
+        return grasps, None
+    return [], f"no grasp found: {explain_no_grasps(mesh, config, gripper, size_source)['reason']}"
 
 
 def _condition(
-    gt: GraspObject, planning: GraspObject, plan: PlanConfig, task: str, mass: float, config: GraspEvalConfig
+    gt: GraspObject,
+    planning: GraspObject,
+    plan: PlanConfig,
+    task: str,
+    mass: float,
+    config: GraspEvalConfig,
+    size_source: str = "mesh as given",
 ) -> tuple[list[Grasp], dict[str, Any]]:
     """Plan on ``planning``, score every grasp on ``gt`` (both metric), lift the best few."""
     gripper = ParallelJawGripper()
-    grasps, why = _plan(planning, plan, gripper)
+    grasps, why = _plan(planning, plan, gripper, size_source)
     scores = score_grasps(gt, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)), gripper)
     lift, disturb = _lift(gt, grasps, config.lift_grasps, mass, config.disturb) if config.lift else ([], [])
     return grasps, {
@@ -175,7 +188,9 @@ def evaluate_object(
         for surface, affordance in (("whole", "none"), ("part", task)):
             planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
             cond = f"{name}_{surface}"
-            grasps, result[cond] = _condition(gt, planning, replace(plan, affordance=affordance), task, mass, config)
+            grasps, result[cond] = _condition(
+                gt, planning, replace(plan, affordance=affordance), task, mass, config, size.source
+            )
             panels[cond] = (mesh, grasps)
     if picture is not None:
         from affnerf.eval.grasp_pictures import write_category_picture
