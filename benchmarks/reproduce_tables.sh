@@ -54,8 +54,9 @@ for held in teapot scissors; do
         --out "$W/eval-unseen-$held" $EVAL
 done
 
-# 7. Table 3: grasps on the test objects of the paper's four categories
-$A eval grasp --run "$W/affnerf" --data "$W/data" --out "$W/grasps" --device "$DEVICE"
+# 7. Table 3 as a 2x2 (true or predicted mesh x whole surface or task part), 5 test objects of each of the 8 categories,
+#    with the shipped model; 18 minutes on one core (benchmarks/results/table3.md)
+$A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
 # 8. collect
 mkdir -p "$R"
@@ -68,3 +69,4 @@ for held in teapot scissors; do
     cp "$W/eval-unseen-$held/metrics.json" "$R/metrics_unseen_$held.json"
 done
 cp "$W/grasps/table3.md" "$R/table3.md"; cp "$W/grasps/grasp_metrics.json" "$R/grasp_metrics.json"
+cp "$W/grasps/grasp_objects.json" "$R/grasp_objects.json"; cp "$W/grasps"/grasps_*.png "$R/"
