@@ -12,12 +12,22 @@ from affnerf.eval.registry import MethodContext, MethodSpec, method_names, parse
 
 
 def test_builtin_methods_are_registered_in_order():
-    expected = ["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval", "constant"]
-    assert method_names()[:7] == expected
+    expected = [
+        "affnerf",
+        "pixelnerf",
+        "pose-aware",
+        "semantic-ray",
+        "gsnerf",
+        "semantic-nerf",
+        "retrieval",
+        "constant",
+    ]
+    assert method_names()[:8] == expected
 
 
 def test_all_leaves_out_the_constant_floor():
-    assert parse_methods("all") == ["affnerf", "pixelnerf", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval"]
+    everything = ["affnerf", "pixelnerf", "pose-aware", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval"]
+    assert parse_methods("all") == everything
     assert parse_methods("semantic-ray,gsnerf") == ["semantic-ray", "gsnerf"]
     assert parse_methods(" retrieval , constant ") == ["retrieval", "constant"]
 

@@ -63,8 +63,7 @@ class ObjectNeRF(ConditionedNeRF):
     """An unconditioned field: one object, no encoder."""
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
-        super().__init__()
-        self.config, self.num_classes = config, num_classes
+        super().__init__(config, num_classes)
         self.renderer = FieldRenderer(config, num_classes, 0, 0)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> None:
