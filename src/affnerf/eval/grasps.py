@@ -209,8 +209,11 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
     started = time.perf_counter()
     ds = Dataset.open(config.data)
     loaded = load_model(config.run, pick_device(config.device))
-    if loaded.model.config.kind != "affnerf":
-        raise AffnerfError(f"{loaded.path}: grasp evaluation predicts affordance models with an AFF-NeRF run")
+    if loaded.model.needs_input_pose:
+        raise AffnerfError(
+            f"{loaded.path}: grasp evaluation predicts affordance models from one unposed image: "
+            f"use an AFF-NeRF (or pose-aware) run, not {loaded.model.config.kind}"
+        )
     cats = [c.strip() for c in config.categories.split(",") if c.strip()]
     entries = ds.objects(config.split, cats)
     if config.max_objects:
