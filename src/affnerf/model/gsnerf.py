@@ -53,7 +53,6 @@ from affnerf.model.multiview import (
     stacked_features,
 )
 from affnerf.model.pixelnerf import project
-from affnerf.model.resnet import ResNet18
 
 #: Depth planes of each source view's cost volume.
 DEPTH_PLANES = 16
@@ -198,7 +197,6 @@ class GSNeRF(MultiViewNeRF):
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
         super().__init__(config, num_classes)
-        self.backbone = ResNet18(config.encoder_width, stages=3)
         feat = sum(self.backbone.channels)
         dim = 2 * config.code_dim
         self.dim = dim

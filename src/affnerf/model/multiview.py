@@ -21,6 +21,7 @@ import torch
 from torch.nn import functional as F
 
 from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import ModelConfig
 from affnerf.model.field import ConditionalField
 from affnerf.model.pixelnerf import project
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs, scatter_rays
@@ -191,10 +192,15 @@ class RayBlockRenderer(FieldRenderer):
 
 
 class MultiViewNeRF(ConditionedNeRF):
-    """Base of the models whose conditioning attends along rays: subclasses set ``self.renderer`` to a
+    """Base of the models whose conditioning attends along rays: each source view goes through ``self.backbone``
+    (a ResNet18 of ``encoder_width``, three stages); subclasses set ``self.renderer`` to a
     :class:`RayBlockRenderer` and implement :meth:`encode_views` and :meth:`ray_condition`."""
 
     renderer: RayBlockRenderer
+
+    def __init__(self, config: ModelConfig, num_classes: int) -> None:
+        super().__init__(config, num_classes)
+        self.backbone = ResNet18(config.encoder_width, stages=3)
 
     @abstractmethod
     def ray_condition(self, encoding: Any, ray_object: torch.Tensor) -> BlockCondition:

@@ -34,7 +34,6 @@ from affnerf.model.multiview import (
     sample_views,
     stacked_features,
 )
-from affnerf.model.resnet import ResNet18
 
 #: Positional-encoding frequencies of a sample's position in a source camera's frame.
 VIEW_PE = 6
@@ -87,7 +86,6 @@ class SemanticRay(MultiViewNeRF):
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
         super().__init__(config, num_classes)
-        self.backbone = ResNet18(config.encoder_width, stages=3)
         dim = 2 * config.code_dim
         self.dim = dim
         feat = sum(self.backbone.channels)
