@@ -21,6 +21,7 @@ from torch.nn import functional as F
 __all__ = [
     "CAMERA_PARAMS",
     "PARAM_PRIOR",
+    "azimuth_cosine",
     "camera_from_params",
     "camera_loss",
     "camera_errors",
@@ -88,11 +89,16 @@ def camera_from_params(params: torch.Tensor, size: int) -> tuple[torch.Tensor, t
     return w2c, intrinsics
 
 
+def azimuth_cosine(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
+    """(N,) cosine of the azimuth error of (N, 7) predicted camera vectors (their azimuth pair taken by direction
+    only) against the true ones."""
+    return (F.normalize(pred[:, 1:3], dim=-1, eps=1e-6) * true[:, 1:3]).sum(-1)
+
+
 def camera_loss(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
     """0-d loss of (N, 7) predicted camera vectors against the true ones: L1 on elevation, log distance, log focal
     and principal point, plus 1 - cos of the azimuth error (an azimuth pair is compared by direction only)."""
-    direction = F.normalize(pred[:, 1:3], dim=-1, eps=1e-6)
-    azimuth = 1.0 - (direction * true[:, 1:3]).sum(-1)
+    azimuth = 1.0 - azimuth_cosine(pred, true)
     scalars = (pred[:, [0, 3, 4, 5, 6]] - true[:, [0, 3, 4, 5, 6]]).abs().sum(-1)
     return (azimuth + scalars).mean()
 
@@ -100,7 +106,7 @@ def camera_loss(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
 def camera_errors(pred: torch.Tensor, true: torch.Tensor) -> dict[str, torch.Tensor]:
     """Per-crop errors of (N, 7) predicted camera vectors: ``elevation_deg``, ``azimuth_deg`` (0..180),
     ``distance_rel`` (|log ratio|) and ``principal`` (distance in crop sides), each (N,)."""
-    cos = (F.normalize(pred[:, 1:3], dim=-1, eps=1e-6) * true[:, 1:3]).sum(-1).clamp(-1.0, 1.0)
+    cos = azimuth_cosine(pred, true).clamp(-1.0, 1.0)
     return {
         "elevation_deg": torch.rad2deg((pred[:, 0] - true[:, 0]).abs()),
         "azimuth_deg": torch.rad2deg(torch.acos(cos)),
