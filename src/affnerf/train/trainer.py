@@ -12,6 +12,7 @@ checkpoints, validation); :meth:`Trainer.finish` checks the replicas agree and w
 from __future__ import annotations
 
 import dataclasses
+import gc
 import logging
 import time
 from dataclasses import dataclass, field
@@ -73,11 +74,18 @@ def train(config: TrainConfig) -> TrainSummary:
     """Train (or resume) a run; see the module docstring for what it writes."""
     started = time.perf_counter()
     ctx = dist_utils.setup(config.device)
+    trainer = Trainer(config, ctx, started)
     try:
-        trainer = Trainer(config, ctx, started)
         trainer.setup()
-        return trainer.train()
+        summary = trainer.train()
+        dist_utils.barrier(ctx)  # no rank leaves the group while another still talks to it
+        return summary
     finally:
+        # Drop the DistributedDataParallel wrapper (its reducer holds the process group) and collect any cycle
+        # through the trainer now: a group freed only at interpreter exit can abort a gloo rank (SIGABRT).
+        trainer.__dict__.pop("net", None)
+        del trainer
+        gc.collect()
         dist_utils.teardown(ctx)
 
 
