@@ -3,6 +3,7 @@ within their band, the source-depth loss, and a tiny end-to-end forward pass and
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import replace
 
@@ -11,7 +12,15 @@ import torch
 
 from affnerf.data.dataset import Dataset
 from affnerf.model.config import ModelConfig
-from affnerf.model.gsnerf import DEPTH_BAND, GeoEncoding, GSNeRF, pixel_points, plane_sweep_variance, soft_argmin
+from affnerf.model.gsnerf import (
+    DEPTH_BAND,
+    SOURCE_DEPTH_WEIGHT,
+    GeoEncoding,
+    GSNeRF,
+    pixel_points,
+    plane_sweep_variance,
+    soft_argmin,
+)
 from affnerf.model.inputs import dataset_views
 from affnerf.model.multiview import depth_band_samples
 from affnerf.model.registry import build_model
@@ -103,6 +112,15 @@ def test_the_source_depth_loss_is_the_l1_over_pixels_with_a_surface():
     assert GSNeRF.source_depth_loss(encoding, truth).item() == pytest.approx(0.1)
 
 
+def test_training_adds_the_weighted_source_depth_loss_when_the_batch_has_depth():
+    encoding = _one_view_encoding(0.6)
+    truth = torch.full((1, 1, 32, 32), 0.4)
+    model = object.__new__(GSNeRF)  # the loss reads only the encoding
+    losses = GSNeRF.auxiliary_losses(model, encoding, truth)
+    assert losses["loss/source_depth"].item() == pytest.approx(SOURCE_DEPTH_WEIGHT * 0.2)
+    assert GSNeRF.auxiliary_losses(model, encoding, None) == {}
+
+
 def test_gsnerf_renders_the_tiny_dataset_and_trains_five_steps(train_dataset, tiny_train_config):
     from affnerf.train.trainer import train
 
@@ -121,3 +139,5 @@ def test_gsnerf_renders_the_tiny_dataset_and_trains_five_steps(train_dataset, ti
     assert fine is not None and fine.affordance.shape == (5, 12) and torch.isfinite(fine.rgb).all()
     summary = train(config)
     assert summary.step == 5 and (config.out / "checkpoints" / "step_00000005.pt").exists()
+    rows = [json.loads(line) for line in (config.out / "metrics.jsonl").read_text().splitlines()]
+    assert all(r["loss/source_depth"] > 0 for r in rows)  # the Geo-Reasoner's depth is supervised in training

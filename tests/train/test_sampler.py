@@ -91,3 +91,16 @@ def test_state_round_trip_continues_the_same_batches(train_dataset, tmp_path):
         assert x.object_ids == y.object_ids
         np.testing.assert_array_equal(x.origins.numpy(), y.origins.numpy())
         np.testing.assert_array_equal(x.labels.numpy(), y.labels.numpy())
+
+
+def test_the_input_crops_depth_is_the_objects_depth_where_the_crops_show_it(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    batch = RaySampler(frames, 2, 64, 0.5, seed=0, input_views=2).next_batch()
+    assert batch.input_depth.shape == (2, 2, 32, 32)
+    for b in range(2):
+        obj = next(f for f in frames if f.object_id == batch.object_ids[b])
+        background = np.asarray(obj.background, np.float32)
+        shows_object = np.abs(batch.images[b].permute(0, 2, 3, 1).numpy() - background).max(-1) > 0.05
+        has_depth = batch.input_depth[b].numpy() > 0
+        assert (shows_object == has_depth).mean() > 0.9 and 0.05 < has_depth.mean() < 0.9
+        assert has_depth.any() and (batch.input_depth[b][batch.input_depth[b] > 0] < 3.0).all()

@@ -57,6 +57,35 @@ def crop_intrinsics(
     return fl_x * scale, fl_y * scale, (cx - window[0]) * scale, (cy - window[1]) * scale
 
 
+def resample_to_crop(
+    image: np.ndarray, intrinsics: np.ndarray, crop_k: np.ndarray | tuple[float, ...], size: int
+) -> np.ndarray:
+    """An image of the same camera (a depth map, say) seen through a crop's pixels: the nearest image pixel to
+    each crop pixel's centre, 0 where that falls outside the image.
+
+    Args:
+        image: (H, W) or (H, W, C) array.
+        intrinsics: (4,) fl_x, fl_y, cx, cy of ``image``.
+        crop_k: (4,) fl_x, fl_y, cx, cy of the crop (:func:`crop_intrinsics`, at any image resolution).
+        size: the crop's side in pixels.
+
+    Returns:
+        (size, size) or (size, size, C), the dtype of ``image``.
+
+    Example:
+        >>> depth = np.arange(16.0).reshape(4, 4)
+        >>> resample_to_crop(depth, np.array([4.0, 4.0, 2.0, 2.0]), (2.0, 2.0, 1.0, 1.0), 2).tolist()
+        [[5.0, 7.0], [13.0, 15.0]]
+    """
+    centres = np.arange(size) + 0.5
+    u = np.floor((centres - crop_k[2]) / crop_k[0] * intrinsics[0] + intrinsics[2]).astype(np.int64)
+    v = np.floor((centres - crop_k[3]) / crop_k[1] * intrinsics[1] + intrinsics[3]).astype(np.int64)
+    h, w = image.shape[:2]
+    inside = (v[:, None] >= 0) & (v[:, None] < h) & (u[None, :] >= 0) & (u[None, :] < w)
+    out = image[np.clip(v, 0, h - 1)[:, None], np.clip(u, 0, w - 1)[None, :]]
+    return np.where(inside.reshape(inside.shape + (1,) * (out.ndim - 2)), out, 0).astype(image.dtype)
+
+
 def crop_object(
     rgb: np.ndarray,
     mask: np.ndarray,

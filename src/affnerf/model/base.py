@@ -50,8 +50,13 @@ class ConditionedNeRF(nn.Module, ABC):
             poses: (B, V, 4, 4) the views' camera-to-world poses.
         """
 
-    def auxiliary_losses(self, encoding: Any) -> dict[str, torch.Tensor]:
-        """Training losses the model adds to the rendering loss, by log name (each 0-d; none by default)."""
+    def auxiliary_losses(self, encoding: Any, input_depth: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """Training losses the model adds to the rendering loss, by log name (each 0-d; none by default).
+
+        Args:
+            encoding: what :meth:`encode_views` returned for the step's input views.
+            input_depth: (B, V, S, S) true z-depth of the input crops (m, 0 = no surface), when the data has it.
+        """
         return {}
 
     @abstractmethod

@@ -17,11 +17,11 @@ a mean-and-variance token joins them, and attention across the views and a convo
 (GeoNeRF's along-ray aggregation) make the sample's feature. The field (density, colour, semantic heads) is
 PixelNeRF-M's, with the source colours blended by the attention weights joining the colour head.
 
-**Losses.** The photometric and semantic loss of every model here. GSNeRF also supervises depth: the trainer's
-``--depth-weight`` (L1 on the rendered z-depth of object rays) does so on the rendered depth; the source-view depth
-of the Geo-Reasoner can be supervised with :meth:`GSNeRF.source_depth_loss` once the trainer feeds the input
-views' depth maps (conventions §4). Without it the predicted depths learn through rendering (the relative depth
-is a token input).
+**Losses.** The photometric and semantic loss of every model here. GSNeRF also supervises depth: the Geo-Reasoner's
+predicted depth of every source view is supervised with the true depth at the crop's pixels
+(:meth:`GSNeRF.auxiliary_losses`, ``loss/source_depth``, L1 in metres weighted by :data:`SOURCE_DEPTH_WEIGHT`),
+as the original supervises its depth estimates when depth is known; the trainer's ``--depth-weight`` can add an L1
+loss on the rendered z-depth too (off in the ``small`` recipe, as for the other models).
 
 Shrunk from the original (GeoNeRF's three-level cascaded cost volumes of 8 views, a semantic segmentation
 decoder, 4-layer transformers): one cost volume of ``DEPTH_PLANES`` planes at 1/4 of the crop per source view,
@@ -56,6 +56,8 @@ from affnerf.model.pixelnerf import project
 
 #: Depth planes of each source view's cost volume.
 DEPTH_PLANES = 16
+#: Weight of the Geo-Reasoner's source-view depth loss (L1 in metres) beside the photometric and semantic losses.
+SOURCE_DEPTH_WEIGHT = 1.0
 #: Channels of the features the plane sweep compares.
 COST_CHANNELS = 8
 #: Half-width (m) of the band of fine samples around a ray's predicted depth, and the depth (m) behind a view's
@@ -301,6 +303,14 @@ class GSNeRF(MultiViewNeRF):
             return depth_band_samples(t_star, near, far, DEPTH_BAND, self.config.num_fine, perturb, generator)
 
         return sample
+
+    def auxiliary_losses(
+        self, encoding: GeoEncoding, input_depth: torch.Tensor | None = None
+    ) -> dict[str, torch.Tensor]:
+        """``loss/source_depth``: :data:`SOURCE_DEPTH_WEIGHT` x :meth:`source_depth_loss` (empty without depth)."""
+        if input_depth is None:
+            return {}
+        return {"loss/source_depth": SOURCE_DEPTH_WEIGHT * self.source_depth_loss(encoding, input_depth)}
 
     @staticmethod
     def source_depth_loss(encoding: GeoEncoding, depth: torch.Tensor) -> torch.Tensor:

@@ -120,7 +120,9 @@ class PoseAwareNeRF(ConditionedNeRF):
             true_camera=true_camera,
         )
 
-    def auxiliary_losses(self, encoding: PoseAwareCodes) -> dict[str, torch.Tensor]:
+    def auxiliary_losses(
+        self, encoding: PoseAwareCodes, input_depth: torch.Tensor | None = None
+    ) -> dict[str, torch.Tensor]:
         """``loss/camera``: the camera head against the true input cameras (empty without them)."""
         if encoding.true_camera is None:
             return {}

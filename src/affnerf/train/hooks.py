@@ -24,7 +24,8 @@ from affnerf.train.validate import validate
 
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
 #: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with mask
-#: or depth losses ``loss/mask`` and ``loss/depth``; the pose-aware model's ``loss/camera``) and the learning rate it
+#: or depth losses ``loss/mask`` and ``loss/depth``; the pose-aware model's ``loss/camera``; GSNeRF's
+#: ``loss/source_depth``) and the learning rate it
 #: used (``train/lr``, a float).
 IterationOutputs = dict[str, torch.Tensor | float]
 
@@ -66,7 +67,14 @@ class LogScalars:
     #: The outputs averaged over ranks, in this order.
     AVERAGED = ("loss/total", "loss/mse", "loss/affordance_ce", "train/affordance_accuracy")
     #: Outputs averaged and logged when an iteration reports them (3D supervision on).
-    OPTIONAL = ("loss/occupancy", "loss/point_affordance", "loss/mask", "loss/depth", "loss/camera")
+    OPTIONAL = (
+        "loss/occupancy",
+        "loss/point_affordance",
+        "loss/mask",
+        "loss/depth",
+        "loss/camera",
+        "loss/source_depth",
+    )
 
     def __init__(
         self, config: TrainConfig, ctx: dist_utils.Context, logger: MetricsLogger, bar: tqdm, started: float

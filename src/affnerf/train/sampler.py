@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from affnerf.data.crop import resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.points import PointSet
@@ -29,6 +30,8 @@ class RayBatch:
         images: (B, V, 3, S, S) float encoder crops in [0, 1].
         input_intrinsics: (B, V, 4) the crops' fl_x, fl_y, cx, cy.
         input_poses: (B, V, 4, 4) the encoded views' camera-to-world poses.
+        input_depth: (B, V, S, S) true z-depth (m, 0 = no surface) at the crops' pixels (GSNeRF's source-view depth
+            supervision), the nearest pixel of the cached depth map.
         ray_object: (R,) index of each ray's object in ``images``.
         origins: (R, 3) ray origins.
         dirs: (R, 3) ray directions (unit length along the camera axis).
@@ -44,6 +47,7 @@ class RayBatch:
     images: torch.Tensor
     input_intrinsics: torch.Tensor
     input_poses: torch.Tensor
+    input_depth: torch.Tensor
     ray_object: torch.Tensor
     origins: torch.Tensor
     dirs: torch.Tensor
@@ -169,7 +173,9 @@ class RaySampler:
             views = other_views(self.rng, len(obj), enc, int(count))
             fg = self.rng.random(int(count)) < self.foreground_fraction
             u, v = draw_pixels(self.rng, obj, views, fg)
-            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc]))
+            size = obj.crops.shape[1]
+            crop_depth = [resample_to_crop(obj.depth[e], obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
+            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], np.stack(crop_depth)))
             enc_views.append(enc)
             parts.append((slot, obj, views, u, v))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
@@ -206,6 +212,7 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         images=torch.from_numpy(np.stack([i[0] for i in images])).permute(0, 1, 4, 2, 3).float() / 255.0,
         input_intrinsics=torch.from_numpy(np.stack([i[1] for i in images])).float(),
         input_poses=torch.from_numpy(np.stack([i[2] for i in images])).float(),
+        input_depth=torch.from_numpy(np.stack([i[3] for i in images])).float(),
         ray_object=torch.from_numpy(np.concatenate(ray_object)).long(),
         origins=origins.float(),
         dirs=dirs.float(),

@@ -161,7 +161,7 @@ class TrainingPass(torch.nn.Module):
             encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
         )
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
-        return coarse, fine, geometry, m.auxiliary_losses(encoding)
+        return coarse, fine, geometry, m.auxiliary_losses(encoding, batch.input_depth)
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
@@ -283,7 +283,7 @@ class Trainer:
         tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
         finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
         with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field; and the model's
-        auxiliary losses (the pose-aware model's ``loss/camera``).
+        auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
         config, state = self.config, self.state
         lr = learning_rate(config, step)
@@ -316,7 +316,7 @@ class Trainer:
             "train/affordance_accuracy": (final.affordance.detach().argmax(-1) == batch.labels).float().mean(),
         }
         total = terms.total
-        for name, term in auxiliary.items():  # the model's own losses (the pose-aware camera head's), weight 1
+        for name, term in auxiliary.items():  # the model's own (pose-aware camera, GSNeRF source depth), as weighted
             parts[name] = term.detach()
             total = total + term
         if config.mask_weight > 0 or config.depth_weight > 0:

@@ -1,0 +1,34 @@
+"""Crops and what is resampled through them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from affnerf.data.crop import crop_intrinsics, resample_to_crop
+
+
+def test_a_crop_at_the_windows_own_resolution_reads_the_window_pixel_for_pixel():
+    image = np.random.default_rng(0).random((8, 10)).astype(np.float32)
+    k = np.array([9.0, 9.0, 5.0, 4.0])
+    window = (2, 1, 5)  # left, top, side
+    crop_k = crop_intrinsics(*k, window, 5)
+    np.testing.assert_array_equal(resample_to_crop(image, k, crop_k, 5), image[1:6, 2:7])
+
+
+def test_a_smaller_crop_takes_the_nearest_pixel_and_keeps_channels():
+    image = np.arange(8 * 8 * 2, dtype=np.float64).reshape(8, 8, 2)
+    k = np.array([8.0, 8.0, 4.0, 4.0])
+    crop_k = crop_intrinsics(*k, (0, 0, 8), 2)  # each crop pixel covers 4 x 4 image pixels: centres at 2.0, 6.0
+    out = resample_to_crop(image, k, crop_k, 2)
+    assert out.shape == (2, 2, 2)
+    np.testing.assert_array_equal(out[..., 0], image[[2, 6]][:, [2, 6], 0])
+
+
+def test_crop_pixels_outside_the_image_are_zero():
+    image = np.ones((6, 6), np.float16)
+    k = np.array([6.0, 6.0, 3.0, 3.0])
+    crop_k = crop_intrinsics(*k, (-2, 0, 4), 4)  # the window's two left columns lie off the image
+    out = resample_to_crop(image, k, crop_k, 4)
+    assert out.dtype == np.float16
+    np.testing.assert_array_equal(out[:, :2], 0)
+    np.testing.assert_array_equal(out[:, 2:], 1)
