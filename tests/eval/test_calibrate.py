@@ -11,6 +11,7 @@ import pytest
 import torch
 
 from affnerf.cli.main import main
+from affnerf.data.dataset import Dataset
 from affnerf.eval import calibrate
 from affnerf.eval.calibrate import CalibrateConfig, choose_level, run_calibration
 from affnerf.metrics.surface import SurfaceSamples
@@ -78,6 +79,14 @@ def test_bad_input_is_one_line_and_exit_2(run, train_dataset, capsys, args, mess
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and message in err
+
+
+def test_only_the_named_categories_choose_the_level(train_dataset):
+    ds = Dataset.open(train_dataset)
+    both = calibrate.calibration_objects(ds, "train", 10)
+    bottles = calibrate.calibration_objects(ds, "train", 10, "bottle")
+    assert {o.record.category for o in both} == {"screwdriver", "bottle"}
+    assert bottles and {o.record.category for o in bottles} == {"bottle"}
 
 
 def test_ties_go_to_miou_then_the_level_closest_to_the_current_one():

@@ -47,6 +47,8 @@ class CalibrateConfig:
         run: a trained run folder (its newest checkpoint is calibrated) or a checkpoint file.
         checkpoint: a single checkpoint file instead of ``run`` (e.g. the shipped ``affnerf-small.pt``).
         split: the split whose objects score the levels.
+        categories: only these categories (comma-separated; empty = all), e.g. a leave-one-category-out run's
+            training categories, so the held-out category never chooses its level.
         levels: candidate surface densities (per metre).
         max_objects: at most this many objects, taken round-robin over the split's categories.
         resolution: marching-cubes samples per axis.
@@ -62,6 +64,7 @@ class CalibrateConfig:
     run: Path | None = None
     checkpoint: Path | None = None
     split: str = "val"
+    categories: str = ""
     levels: tuple[float, ...] = DEFAULT_LEVELS
     max_objects: int = 16
     resolution: int = 96
@@ -100,15 +103,17 @@ def calibration_path(source: Path, out: Path | None = None) -> Path:
     return source.with_suffix(f".{CALIBRATION_NAME}")
 
 
-def calibration_objects(ds: Dataset, split: str, max_objects: int) -> list[ObjectData]:
-    """The first ``max_objects`` objects of ``split`` taken round-robin over its categories.
+def calibration_objects(ds: Dataset, split: str, max_objects: int, categories: str = "") -> list[ObjectData]:
+    """The first ``max_objects`` objects of ``split`` (of ``categories`` only, when given) taken round-robin over
+    its categories.
 
     Raises:
-        AffnerfError: naming ``dataset.json``, when the split has no objects.
+        AffnerfError: naming ``dataset.json``, when the split has no objects (of those categories).
     """
-    entries = interleave_categories(ds.objects(split))[: max(max_objects, 0)]
+    entries = interleave_categories(ds.objects(split, categories or None))[: max(max_objects, 0)]
     if not entries:
-        raise input_error(ds.root / "dataset.json", f"no objects in split {split!r} to calibrate on")
+        wanted = f" of categories {categories}" if categories else ""
+        raise input_error(ds.root / "dataset.json", f"no objects in split {split!r}{wanted} to calibrate on")
     return [ds.load_object(e) for e in entries]
 
 
@@ -222,7 +227,7 @@ def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
     resolve_checkpoint(source)  # a missing run fails before the dataset is read
     ds = Dataset.open(config.data)
     loaded = _load(source, ds, config.device)
-    objects = calibration_objects(ds, config.split, config.max_objects)
+    objects = calibration_objects(ds, config.split, config.max_objects, config.categories)
     method = ConditionedNeRFMethod(loaded, mesh_resolution=config.resolution)
     half_extent = loaded.model.config.scene_half_extent
     scores, views = [], {}
