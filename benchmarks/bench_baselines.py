@@ -6,11 +6,12 @@ generated dataset (frames at half its 200x150 resolution: the ``small`` recipe's
 :func:`affnerf.bench.training.step_throughput`), rays/s = rays per step / median step time. Rendering: one test
 object encoded from its first input views, one target view at ``--scale`` of the dataset resolution (200x150 at
 1.0, what ``affnerf eval --scale 0.5`` scores on 400x300 data), rendered ``--repeats`` times coarse-to-fine (as
-in training) and with the occupancy grid (the fast path ``affnerf eval`` uses); median seconds per view. Fresh
-(untrained) weights: timings do not depend on them, except that the fast path skips the empty space an
-untrained field has, so its time is a lower bound. Run:
+in training) and with the occupancy grid (the fast path ``affnerf eval`` uses); median seconds per view. With
+``--runs`` the views are rendered by the trained models (what ``affnerf eval`` pays); with fresh weights the fast
+path skips the empty space an untrained field has, so its time is then only a lower bound. Run:
 
-    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/bench_baselines.py --out benchmarks/results/baselines.json
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/bench_baselines.py --out benchmarks/results/baselines.json \
+        --runs pixelnerf=RUN_PIX,semantic-ray=RUN_SEMRAY,gsnerf=RUN_GSNERF
     .venv/bin/python benchmarks/bench_baselines.py --smoke      # about 20 s, prints, writes nothing
 
 Take timings on an otherwise idle machine.
@@ -35,6 +36,7 @@ from affnerf.data.generate import GenerateConfig, generate_dataset
 from affnerf.model.inputs import dataset_views
 from affnerf.model.registry import build_model
 from affnerf.model.views import render_view
+from affnerf.predict.loading import load_model
 from affnerf.train.cache import cached_frames
 from affnerf.train.config import SMALL, TrainConfig
 
@@ -52,10 +54,13 @@ def dataset(root: Path, smoke: bool) -> Path:
     return root
 
 
-def view_seconds(config: TrainConfig, data: Path, scale: float, repeats: int) -> dict[str, Any]:
-    """Median seconds to render one target view of a test object, coarse-to-fine and with the occupancy grid."""
+def view_seconds(
+    config: TrainConfig, data: Path, scale: float, repeats: int, weights: Path | None = None
+) -> dict[str, Any]:
+    """Median seconds to render one target view of a test object, coarse-to-fine and with the occupancy grid;
+    with the trained model of run or checkpoint ``weights`` when given, else fresh weights."""
     torch.manual_seed(0)
-    model = build_model(config.model, 12).eval()
+    model = (load_model(weights).model if weights is not None else build_model(config.model, 12)).eval()
     ds = Dataset.open(data)
     obj = ds.load_object(ds.objects("test")[0])
     inputs = list(range(config.input_views))
@@ -80,9 +85,11 @@ def measure(kind: str, data: Path, cache: Path, args: argparse.Namespace) -> dic
     frames = [cached_frames(ds.load_object(e), cache, 0.5, crop) for e in ds.objects("train")]
     started = time.perf_counter()
     train = step_throughput(config, frames, args.steps, torch.device("cpu"))
-    render = view_seconds(config, data, args.scale, args.repeats)
+    weights = args.trained.get(kind)
+    render = view_seconds(config, data, args.scale, args.repeats, weights)
     return {
         "input_views": config.input_views,
+        "view_weights": str(weights) if weights is not None else "fresh (untrained)",
         "rays_per_step": config.rays_per_step,
         "training": train,
         "view": render,
@@ -100,7 +107,13 @@ def main() -> None:
     parser.add_argument("--smoke", action="store_true", help="a few steps on a smaller dataset; writes nothing")
     parser.add_argument("--work", type=Path, default=HERE / ".work" / "baselines")
     parser.add_argument("--out", type=Path, default=None, help="results JSON (not written in --smoke)")
+    parser.add_argument(
+        "--runs",
+        default="",
+        help="KIND=RUN,... trained runs (or checkpoints) whose weights time the views (default: fresh weights)",
+    )
     args = parser.parse_args()
+    args.trained = {k: Path(v) for k, _, v in (item.partition("=") for item in args.runs.split(",") if item)}
     if args.smoke:
         args.steps, args.repeats, args.scale = 2, 1, 0.25
     work = args.work / ("smoke" if args.smoke else "full")
