@@ -173,9 +173,8 @@ class RaySampler:
             views = other_views(self.rng, len(obj), enc, int(count))
             fg = self.rng.random(int(count)) < self.foreground_fraction
             u, v = draw_pixels(self.rng, obj, views, fg)
-            size = obj.crops.shape[1]
-            crop_depth = [resample_to_crop(obj.depth[e], obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
-            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], np.stack(crop_depth)))
+            crop_depth = _input_depth(obj, enc)
+            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth))
             enc_views.append(enc)
             parts.append((slot, obj, views, u, v))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
@@ -188,6 +187,13 @@ class RaySampler:
         self.epoch, self.position = int(state["epoch"]), int(state["position"])
         self.rng.bit_generator.state = state["rng"]
         self._order = self._epoch_order(self.epoch)
+
+
+def _input_depth(obj: ObjectFrames, enc: np.ndarray) -> np.ndarray:
+    """(V, S, S) depth of each encoder view's crop (V may be 0: a method fitted without input views)."""
+    size = obj.crops.shape[1]
+    crops = [resample_to_crop(obj.depth[e], obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
+    return np.stack(crops) if crops else np.zeros((0, size, size), np.float32)
 
 
 def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
