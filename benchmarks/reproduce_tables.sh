@@ -89,6 +89,7 @@ $A eval --run "$W/affnerf" --data "$W/data" --split test --max-objects 1 --metho
     --semantic-steps 200 --out "$S" $EVAL
 
 # 6. unseen categories: the first 10 instances of the category each leave-one-out run never saw (meshes at 50 /m)
+#    (the committed table2_unseen_*.md came from an earlier run of the same AFF-NeRF command with --time-limit 13)
 for held in teapot scissors; do
     $A eval --run "$W/loco-$held" --data "$W/data" --split all --categories "$held" --method affnerf,retrieval,constant \
         --out "$W/eval-unseen-$held" --scale 0.5 --target-views 20 --max-objects 10 --device "$DEVICE"
