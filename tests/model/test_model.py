@@ -145,3 +145,24 @@ def test_a_fresh_film_field_equals_the_concatenating_one_and_film_lets_the_code_
         film.film.bias[:32] = 1.0  # gamma of the first layer: its pre-activation doubles
     assert not torch.allclose(film.density_only(pts, code), plain.density_only(pts, code))
     assert film.film.out_features == 2 * 32 * 4
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU (CI machines have none)")
+@pytest.mark.parametrize("kind", ["affnerf", "pixelnerf"])
+def test_point_fields_of_a_model_on_a_gpu_take_points_from_the_cpu_as_mesh_extraction_makes_them(kind):
+    from affnerf.model.registry import build_model
+    from affnerf.predict.mesh import evaluate_grid
+    from affnerf.rendering.grid import build_grid
+
+    torch.manual_seed(0)
+    model = build_model(replace(SMALL, kind=kind), 5).eval().cuda()
+    poses = torch.eye(4).repeat(1, 1, 1, 1)
+    poses[..., 2, 3] = 0.7
+    encoding = model.encode_views(
+        torch.rand(1, 1, 3, 32, 32).cuda(), torch.tensor([[[40.0, 40.0, 16.0, 16.0]]]).cuda(), poses.cuda()
+    )
+    density, labels = model.point_fields(encoding, 0)
+    grid = build_grid(density, 0.22, resolution=8, threshold=-1.0, device="cuda")  # every cell occupied
+    volume = evaluate_grid(density, 6, 0.22, occupancy=grid)
+    points = torch.rand(10, 3) * 0.4 - 0.2
+    assert volume.shape == (6, 6, 6) and labels(points).device.type == "cuda"

@@ -138,18 +138,22 @@ class ConditionedNeRF(nn.Module, ABC):
 
     def point_fields(self, encoding: Any, index: int = 0) -> tuple[Any, Any]:
         """Density and affordance-class callables of object ``index`` at arbitrary (N, 3) points (the fine field
-        when there is one), for mesh extraction."""
+        when there is one), for mesh extraction. The points may live on any device (mesh extraction makes its grid
+        on the CPU): they are moved to the model's, and the results stay there."""
         field = self.fine if self.fine is not None else self.coarse
+        device = next(self.parameters()).device
 
         def cond(points: torch.Tensor) -> torch.Tensor:
-            rays = torch.arange(len(points), device=points.device)
-            obj = torch.full((len(points),), index, dtype=torch.long, device=points.device)
+            rays = torch.arange(len(points), device=device)
+            obj = torch.full((len(points),), index, dtype=torch.long, device=device)
             return self.condition(encoding, obj)(points, rays)[0]
 
         def density(points: torch.Tensor) -> torch.Tensor:
+            points = points.to(device)
             return field.density_only(points, cond(points))
 
         def labels(points: torch.Tensor) -> torch.Tensor:
+            points = points.to(device)
             _, logits = field.geometry(points, cond(points))
             return logits.argmax(dim=-1) + 1  # object classes start at 1
 

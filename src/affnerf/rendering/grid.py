@@ -32,12 +32,13 @@ class OccupancyGrid:
         return self.occupied.shape[0]
 
     def lookup(self, points: torch.Tensor) -> torch.Tensor:
-        """(N,) whether (N, 3) points fall in occupied cells (points outside the cube are empty)."""
+        """(N,) whether (N, 3) points fall in occupied cells (points outside the cube are empty), on the points'
+        device (a grid built on a GPU also answers for points on the CPU, as mesh extraction makes them)."""
         r = self.resolution
         idx = torch.floor((points + self.half_extent) / (2 * self.half_extent) * r).long()
         inside = ((idx >= 0) & (idx < r)).all(dim=-1)
         idx = idx.clamp(0, r - 1)
-        return inside & self.occupied[idx[:, 0], idx[:, 1], idx[:, 2]]
+        return inside & self.occupied.to(idx.device)[idx[:, 0], idx[:, 1], idx[:, 2]]
 
 
 @torch.no_grad()
