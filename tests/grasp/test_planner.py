@@ -11,7 +11,7 @@ import trimesh
 
 from affnerf.cli.main import main
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal
+from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal, shrink_part
 from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import LabelledMesh, write_labelled_ply
@@ -31,6 +31,65 @@ def test_grasps_restricted_to_an_affordance_touch_only_it(screwdriver):
     assert grasps
     assert all(g.affordance == ["screw", "screw"] for g in grasps)
     assert [g.epsilon for g in grasps] == sorted((g.epsilon for g in grasps), reverse=True)
+
+
+def _strip(n: int = 41) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A flat strip 0.4 m long along x, of n - 1 squares; the part is x < 0.1 (a quarter of it)."""
+    x = np.linspace(-0.2, 0.2, n)
+    vertices = np.concatenate(
+        [np.stack([x, np.zeros(n), np.zeros(n)], 1), np.stack([x, np.ones(n) * 0.01, np.zeros(n)], 1)]
+    )
+    faces = np.concatenate([[[i, i + 1, n + i], [i + 1, n + i + 1, n + i]] for i in range(n - 1)])
+    part = vertices[faces].mean(axis=1)[:, 0] < -0.1
+    return vertices, faces, part
+
+
+def test_shrinking_a_part_keeps_only_faces_that_far_from_other_labels():
+    vertices, faces, part = _strip()
+    kept = shrink_part(vertices, faces, part, 0.03)
+    centre_x = vertices[faces].mean(axis=1)[:, 0]
+    assert kept.any() and not (kept & ~part).any()
+    assert centre_x[kept].max() <= -0.1 - 0.03 + 1e-9 < centre_x[part & ~kept].min()
+    assert np.array_equal(shrink_part(vertices, faces, part, 0.0), part)
+
+
+def test_a_part_thinner_than_the_margin_is_shrunk_less_never_emptied():
+    vertices, faces, part = _strip()
+    kept = shrink_part(vertices, faces, part, 0.15)  # the part is 0.1 long: 0.15 and 0.075 leave nothing, 0.0375 does
+    centre_x = vertices[faces].mean(axis=1)[:, 0]
+    assert kept.any() and centre_x[kept].max() <= -0.1 - 0.0375 + 1e-9
+    lone = np.zeros(len(faces), bool)
+    lone[[0, 1]] = True  # a part narrower than every halving keeps all of itself
+    assert np.array_equal(shrink_part(vertices, faces, lone, 0.5), lone)
+
+
+def test_a_margin_keeps_restricted_contacts_away_from_the_parts_boundary(screwdriver):
+    shaft = screwdriver.face_affordance == AFFORDANCE_CLASSES.index("screw")
+    others = np.unique(screwdriver.faces[~shaft])
+    config = PlanConfig(affordance="screw", num=8, refine=RefineConfig(steps=0), part_margin=0.02)
+    grasps = plan_grasps(screwdriver, config)
+    assert grasps
+    contacts = np.concatenate([g.contacts for g in grasps])
+    gap = np.linalg.norm(contacts[:, None] - screwdriver.vertices[others][None], axis=-1).min(axis=1)
+    assert gap.min() > 0.02 - 0.01  # faces are kept by their centroid: a contact may sit up to a face's size closer
+
+
+def test_a_margin_that_leaves_only_ungraspable_surface_falls_back_to_the_whole_part():
+    body = trimesh.creation.box((0.04, 0.04, 0.04))  # another label
+    bar = trimesh.creation.box((0.06, 0.012, 0.012), trimesh.transformations.translation_matrix((0.05, 0, 0)))
+    block = trimesh.creation.box((0.3, 0.3, 0.3), trimesh.transformations.translation_matrix((0.5, 0, 0)))
+    meshes = (body, bar, block)
+    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes])[:-1]
+    vertices = np.concatenate([m.vertices for m in meshes])
+    faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets, strict=True)])
+    grasp, other = AFFORDANCE_CLASSES.index("grasp"), AFFORDANCE_CLASSES.index("screw")
+    labels = np.concatenate([np.full(len(m.faces), lab) for m, lab in zip(meshes, (other, grasp, grasp), strict=True)])
+    obj = GraspObject(vertices, faces, labels, "bar and block")
+    config = PlanConfig(affordance="grasp", num=4, refine=RefineConfig(steps=0), part_margin=0.1)
+    shrunk = vertices[faces[shrink_part(vertices, faces, labels == grasp, 0.1)]].mean(axis=1)
+    assert shrunk[:, 0].min() > 0.3  # only the block is 0.1 from the body: it is wider than any opening
+    grasps = plan_grasps(obj, config)
+    assert grasps and all(np.all(g.contacts[:, 0] < 0.1) for g in grasps)  # on the bar, as without a margin
 
 
 def test_planned_grasps_are_valid_and_collision_free(screwdriver):

@@ -26,6 +26,7 @@ def plan(
     candidates: int = 64,
     refine_steps: int = 40,
     seed: int = 0,
+    part_margin: float | None = None,
 ) -> None:
     """Plan parallel-jaw grasps on a mesh (PLY; with --affordance, one carrying an integer `affordance` property).
 
@@ -48,6 +49,9 @@ def plan(
         candidates: antipodal pairs sampled (each tried with four approach directions).
         refine_steps: local-search steps (0 = none).
         seed: random seed.
+        part_margin: with --affordance, contacts keep at least this distance (metres, at metric size) from the
+            surface of other labels, where a predicted model's labels are least reliable (default: the planner's,
+            affnerf.grasp.planner.PART_MARGIN; 0 = the whole part).
     """
     from dataclasses import replace
 
@@ -60,6 +64,8 @@ def plan(
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
+    if part_margin is not None:
+        config = replace(config, part_margin=part_margin)
     config = replace(config, refine=replace(config.refine, steps=refine_steps))
     planned = plan_into(
         out, canonical, mesh, config, ParallelJawGripper(max_opening=max_opening), object_size, category

@@ -25,7 +25,7 @@ from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.planner import PART_MARGIN, Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
 from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
@@ -63,6 +63,8 @@ class GraspEvalConfig:
         device: ``auto``, ``cpu`` or ``cuda``.
         object_size: every object's largest side in metres (None: each object's own, from its ``scale``).
         pictures: write OUT/grasps_<category>.png: the first object's four planning meshes with their best grasps.
+        part_margin: in the task-part conditions, contacts keep this distance (metres, at metric size) from the
+            surface of other labels (:class:`~affnerf.grasp.planner.PlanConfig`).
     """
 
     run: Path
@@ -82,6 +84,7 @@ class GraspEvalConfig:
     device: str = "auto"
     object_size: float | None = None
     pictures: bool = True
+    part_margin: float = PART_MARGIN
 
 
 def predicted_object(
@@ -173,7 +176,7 @@ def evaluate_object(
     )[0][0]
     predicted = scaled(predicted_object(loaded, obj, view, config.resolution, config.level), size.factor)
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
-    plan = PlanConfig(num=config.num, seed=config.seed)
+    plan = PlanConfig(num=config.num, seed=config.seed, part_margin=config.part_margin)
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))
     result: dict[str, Any] = {
         "object_id": obj.record.object_id,

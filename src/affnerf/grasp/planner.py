@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from affnerf.errors import AffnerfError
 from affnerf.grasp.contacts import close_jaws, score_contacts
@@ -21,6 +22,9 @@ from affnerf.grasp.quality import MU
 from affnerf.grasp.refine import RefineConfig, refine_grasps
 from affnerf.grasp.target import GraspObject
 from affnerf.vocab import affordance_id
+
+#: Default ``part_margin`` of a restricted grasp, metres (benchmarks/results/grasp_margin.md).
+PART_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,11 @@ class PlanConfig:
         refine: the local search (``steps=0`` skips it).
         surface_samples: surface points of the refinement (and of the collision check, with the vertices).
         collision_tolerance: penetration of the gripper into the surface still accepted, metres.
+        part_margin: with ``affordance``, contacts keep at least this distance (metres) from the surface of every
+            other label: the allowed part is shrunk away from its boundaries, where a predicted model's labels are
+            least reliable. Halved while that would leave nothing (:func:`shrink_part`), and when no grasp survives
+            on what is left the whole part is planned on, so a margin never costs an object its grasps (0 = the
+            whole part).
     """
 
     affordance: str = "none"
@@ -48,6 +57,7 @@ class PlanConfig:
     refine: RefineConfig = field(default_factory=RefineConfig)
     surface_samples: int = 1500
     collision_tolerance: float = 0.001
+    part_margin: float = PART_MARGIN
 
 
 @dataclass
@@ -78,8 +88,9 @@ class Grasp:
         }
 
 
-def allowed_faces(obj: GraspObject, affordance: str) -> np.ndarray | None:
-    """(F,) bool faces contacts may lie on, or None for anywhere."""
+def allowed_faces(obj: GraspObject, affordance: str, margin: float = 0.0) -> np.ndarray | None:
+    """(F,) bool faces contacts may lie on, or None for anywhere: the faces of ``affordance`` whose centroid is
+    at least ``margin`` metres from every vertex of a face of another label (:func:`shrink_part`)."""
     if affordance == "none":
         return None
     if obj.face_affordance is None:
@@ -87,7 +98,30 @@ def allowed_faces(obj: GraspObject, affordance: str) -> np.ndarray | None:
     mask = obj.face_affordance == affordance_id(affordance)
     if not mask.any():
         raise AffnerfError(f"{obj.name}: no surface labelled {affordance!r} to grasp")
-    return mask
+    return shrink_part(obj.vertices, obj.faces, mask, margin)
+
+
+def shrink_part(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, margin: float) -> np.ndarray:
+    """The faces of a part at least ``margin`` from the rest of the surface; where nothing is that far, the
+    margin halved up to three times, then the whole part.
+
+    Args:
+        vertices: (V, 3); faces: (F, 3); part: (F,) bool; margin: metres.
+
+    Returns:
+        (F,) bool, a non-empty subset of ``part`` when ``part`` is non-empty.
+    """
+    if margin <= 0 or part.all() or not part.any():
+        return part
+    others = np.unique(faces[~part])
+    distance, _ = cKDTree(vertices[others]).query(vertices[faces[part]].mean(axis=1))
+    for tried in (margin, margin / 2, margin / 4, margin / 8):
+        kept = distance >= tried
+        if kept.any():
+            out = np.zeros_like(part)
+            out[np.flatnonzero(part)[kept]] = True
+            return out
+    return part
 
 
 def sample_antipodal(
@@ -180,9 +214,17 @@ def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, ang
 def plan_grasps(
     obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()
 ) -> list[Grasp]:
-    """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks)."""
+    """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). With a part
+    margin, on the part shrunk by it; when nothing there survives, on the whole part."""
+    grasps = _plan_on(obj, allowed_faces(obj, config.affordance, config.part_margin), config, gripper)
+    if grasps or config.affordance == "none" or config.part_margin <= 0:
+        return grasps
+    return _plan_on(obj, allowed_faces(obj, config.affordance), config, gripper)
+
+
+def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, gripper: ParallelJawGripper) -> list[Grasp]:
+    """Grasps with both contacts on ``mask`` faces ((F,) bool; None = anywhere), best first."""
     rng = np.random.default_rng(config.seed)
-    mask = allowed_faces(obj, config.affordance)
     centres, axes, widths = sample_antipodal(obj, config.candidates, rng, mask, config.mu, gripper)
     if not len(centres):
         return []
