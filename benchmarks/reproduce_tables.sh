@@ -112,7 +112,9 @@ for held in teapot scissors; do
 done
 
 # 7. Table 3 as a 2x2 (true or predicted mesh x whole surface or task part), 5 test objects of each of the 8 categories,
-#    with the shipped model; 18 minutes on one core (benchmarks/results/table3.md)
+#    with the shipped model and the planner's default 1 cm part margin (chosen on validation objects by
+#    benchmarks/grasp_margin.py); about 10 minutes on one core (committed run: the two halves of the categories side
+#    by side, 5 min 49 s, merged; every object is evaluated on its own, so it equals this one command)
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
 # 8. collect
