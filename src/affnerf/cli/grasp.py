@@ -49,9 +49,8 @@ def plan(
         candidates: antipodal pairs sampled (each tried with four approach directions).
         refine_steps: local-search steps (0 = none).
         seed: random seed.
-        part_margin: with --affordance, contacts keep at least this distance (metres, at metric size) from the
-            surface of other labels, where a predicted model's labels are least reliable (default: the planner's,
-            affnerf.grasp.planner.PART_MARGIN; 0 = the whole part).
+        part_margin: with --affordance, contacts keep this distance (m) from other labels, where a prediction's
+            labels are least sure (default: grasp.planner.PART_MARGIN, 0.01; 0 = the whole part; conventions §6).
     """
     from dataclasses import replace
 
@@ -64,9 +63,8 @@ def plan(
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
-    if part_margin is not None:
-        config = replace(config, part_margin=part_margin)
-    config = replace(config, refine=replace(config.refine, steps=refine_steps))
+    margin = config.part_margin if part_margin is None else part_margin
+    config = replace(config, refine=replace(config.refine, steps=refine_steps), part_margin=margin)
     planned = plan_into(
         out, canonical, mesh, config, ParallelJawGripper(max_opening=max_opening), object_size, category
     )
