@@ -88,9 +88,8 @@ class Grasp:
         }
 
 
-def allowed_faces(obj: GraspObject, affordance: str, margin: float = 0.0) -> np.ndarray | None:
-    """(F,) bool faces contacts may lie on, or None for anywhere: the faces of ``affordance`` whose centroid is
-    at least ``margin`` metres from every vertex of a face of another label (:func:`shrink_part`)."""
+def allowed_faces(obj: GraspObject, affordance: str) -> np.ndarray | None:
+    """(F,) bool faces of ``affordance`` that contacts may lie on, or None for anywhere."""
     if affordance == "none":
         return None
     if obj.face_affordance is None:
@@ -98,7 +97,7 @@ def allowed_faces(obj: GraspObject, affordance: str, margin: float = 0.0) -> np.
     mask = obj.face_affordance == affordance_id(affordance)
     if not mask.any():
         raise AffnerfError(f"{obj.name}: no surface labelled {affordance!r} to grasp")
-    return shrink_part(obj.vertices, obj.faces, mask, margin)
+    return mask
 
 
 def shrink_part(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, margin: float) -> np.ndarray:
@@ -216,10 +215,14 @@ def plan_grasps(
 ) -> list[Grasp]:
     """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). With a part
     margin, on the part shrunk by it; when nothing there survives, on the whole part."""
-    grasps = _plan_on(obj, allowed_faces(obj, config.affordance, config.part_margin), config, gripper)
-    if grasps or config.affordance == "none" or config.part_margin <= 0:
+    part = allowed_faces(obj, config.affordance)
+    if part is None:
+        return _plan_on(obj, None, config, gripper)
+    shrunk = shrink_part(obj.vertices, obj.faces, part, config.part_margin)
+    grasps = _plan_on(obj, shrunk, config, gripper)
+    if grasps or np.array_equal(shrunk, part):
         return grasps
-    return _plan_on(obj, allowed_faces(obj, config.affordance), config, gripper)
+    return _plan_on(obj, part, config, gripper)
 
 
 def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, gripper: ParallelJawGripper) -> list[Grasp]:
