@@ -15,6 +15,7 @@ from affnerf.data.dataset import Dataset
 from affnerf.eval import calibrate
 from affnerf.eval.calibrate import CalibrateConfig, choose_level, run_calibration
 from affnerf.metrics.surface import SurfaceSamples
+from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model, resolve_checkpoint
 from affnerf.predict.mesh import evaluate_grid, extract_labelled_mesh, labelled_mesh_from_grid
 
@@ -48,7 +49,13 @@ def test_chosen_level_is_the_sweeps_best_and_is_stored(run, train_dataset, capsy
     assert loaded.model.config.surface_density == result["chosen_level"]
     assert loaded.path == resolve_checkpoint(run)
     out = capsys.readouterr().out.splitlines()
-    assert len(out) == 4 and out[0].startswith("level 7/m: F@1cm") and out[-1].startswith("chosen level")
+    depths = [r["optical_depth"] for r in result["optical_depths"]]
+    assert depths == list(calibrate.DEFAULT_OPTICAL_DEPTHS)
+    assert result["chosen_optical_depth"] == calibrate.choose_optical_depth(result["optical_depths"])
+    assert loaded.model.config.surface_optical_depth == result["chosen_optical_depth"]
+    assert all(r["mean_level"] <= result["chosen_level"] for r in result["optical_depths"])
+    assert len(out) == 3 + len(depths) + 1 and out[0].startswith("level 7/m: F@1cm")
+    assert out[3].startswith(f"at {result['chosen_level']:g}/m, optical depth 0:") and out[-1].startswith("chosen")
 
 
 def test_dry_run_leaves_the_checkpoint_byte_identical(run, train_dataset):
@@ -148,3 +155,28 @@ def test_the_level_whose_surface_matches_the_truth_wins(run, train_dataset, monk
     assert by_level[100.0]["fscore_1cm"] > 0.9 and by_level[100.0]["affordance_miou_3d"] > 0.8
     assert by_level[100.0]["chamfer_l1"] < 5e-3 and by_level[100.0]["meshes_empty"] == 0
     assert all(by_level[level]["fscore_1cm"] == 0.0 for level in (20.0, 50.0, 150.0))
+
+
+def test_the_optical_depth_sweep_finds_a_diffuse_objects_own_level(run, train_dataset, monkeypatch):
+    """A diffuse field (a cone of peak 40/m) never reaches the only level, 100/m, so without the per-object level
+    every mesh is empty; its truth is the sphere where the per-object level at optical depth 2 cuts the cone, so
+    that depth must win and be stored."""
+
+    def diffuse(points: torch.Tensor) -> torch.Tensor:
+        return 40.0 * torch.clamp(1.0 - points.norm(dim=-1) / 0.2, min=0.0)
+
+    resolution, half = 41, 0.25
+    volume = evaluate_grid(diffuse, resolution, half)
+    own = object_level(volume, 2 * half / (resolution - 1), 100.0, 2.0)
+    radius = 0.2 * (1.0 - own / 40.0)
+    monkeypatch.setattr(calibrate, "object_grid", lambda method, obj, inputs: (volume, _upper))
+    monkeypatch.setattr(calibrate, "true_samples", lambda obj, seed: _sphere_samples(radius))
+    config = CalibrateConfig(
+        data=train_dataset, run=run, levels=(100.0,), optical_depths=(0.0, 2.0), resolution=resolution
+    )
+    result = run_calibration(config)
+    off, on = result["optical_depths"]
+    assert off["meshes_empty"] == 2 and off["fscore_1cm"] == 0.0 and off["mean_level"] == 100.0
+    assert on["fscore_1cm"] > 0.9 and on["mean_level"] == pytest.approx(own) and own < 40.0
+    stored = load_model(run).model.config
+    assert result["chosen_optical_depth"] == 2.0 == stored.surface_optical_depth and stored.surface_density == 100.0

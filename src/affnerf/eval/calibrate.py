@@ -6,9 +6,12 @@ protocol's seeded input view(s) (as in Table 2), the fine field's density is eva
 object's occupied cells, as :meth:`~affnerf.eval.methods.affnerf.ConditionedNeRFMethod.mesh` does), and marching
 cubes at each candidate level gives a labelled mesh scored against the object's true mesh: F-score at 1 cm,
 Chamfer-L1 and 3D affordance mIoU (an empty mesh scores F = 0). The level with the highest mean F-score wins; ties
-go to the higher 3D mIoU, then to the level closest to the current one. The sweep is written to
-``calibration.json`` and, unless ``dry_run``, the level replaces ``surface_density`` in the model config stored in
-the checkpoint (a field that may change in a checkpoint: ``model.config.NON_ARCHITECTURE_FIELDS``).
+go to the higher 3D mIoU, then to the level closest to the current one. A second sweep, at that level, tries each
+candidate ``surface_optical_depth`` (:mod:`affnerf.predict.level`: the level lowered per object for diffuse
+objects; 0 = off) on the same grids and keeps the best the same way (ties: the smaller one). The sweeps are
+written to ``calibration.json`` and, unless ``dry_run``, both values replace ``surface_density`` and
+``surface_optical_depth`` in the model config stored in the checkpoint (fields that may change in a checkpoint:
+``model.config.NON_ARCHITECTURE_FIELDS``).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.eval.surface import SurfaceScore, sample_seed, score_mesh, true_samples
 from affnerf.fileio import atomic_write, write_json_atomic
 from affnerf.metrics.surface import SURFACE_KEYS, SurfaceSamples
+from affnerf.predict.level import object_level
 from affnerf.predict.loading import LoadedModel, load_model, resolve_checkpoint
 from affnerf.predict.mesh import PointFn, evaluate_grid, labelled_mesh_from_grid
 from affnerf.predict.predictor import pick_device
@@ -35,6 +39,8 @@ from affnerf.train.checkpoint import load_checkpoint
 
 #: Candidate surface densities (per metre) of the sweep.
 DEFAULT_LEVELS = (5.0, 10.0, 20.0, 35.0, 50.0, 75.0, 100.0, 150.0, 200.0)
+#: Candidate optical depths of the per-object level (:mod:`affnerf.predict.level`); 0 switches it off.
+DEFAULT_OPTICAL_DEPTHS = (0.0, 1.5, 2.0, 3.0, 4.0, 6.0)
 CALIBRATION_NAME = "calibration.json"
 
 
@@ -50,6 +56,7 @@ class CalibrateConfig:
         categories: only these categories (comma-separated; empty = all), e.g. a leave-one-category-out run's
             training categories, so the held-out category never chooses its level.
         levels: candidate surface densities (per metre).
+        optical_depths: candidate ``surface_optical_depth`` values of the second sweep (0 = per-object levels off).
         max_objects: at most this many objects, taken round-robin over the split's categories.
         resolution: marching-cubes samples per axis.
         input_views: views each object is encoded from, chosen by the protocol's seed (as in Table 2).
@@ -66,6 +73,7 @@ class CalibrateConfig:
     split: str = "val"
     categories: str = ""
     levels: tuple[float, ...] = DEFAULT_LEVELS
+    optical_depths: tuple[float, ...] = DEFAULT_OPTICAL_DEPTHS
     max_objects: int = 16
     resolution: int = 96
     input_views: int = 1
@@ -149,6 +157,56 @@ def sweep_grid(
     return scores  # type: ignore[return-value]
 
 
+@dataclass(frozen=True)
+class ObjectGrid:
+    """One calibration object: its (R, R, R) density grid, label function, true surface samples and sample seed."""
+
+    volume: np.ndarray
+    labels: PointFn
+    truth: SurfaceSamples
+    seed: list[int]
+
+
+@torch.no_grad()
+def sweep_optical_depths(
+    grid: ObjectGrid, depths: tuple[float, ...], level: float, half_extent: float
+) -> list[SurfaceScore]:
+    """One object's 3D scores with each candidate ``surface_optical_depth`` at base level ``level`` (each score
+    also gives the object's ``level``); depths that give the same level share one mesh."""
+    spacing = 2.0 * half_extent / (grid.volume.shape[0] - 1)
+    scored: dict[float, SurfaceScore] = {}
+    scores = []
+    for depth in depths:
+        own = object_level(grid.volume, spacing, level, depth)
+        if own not in scored:
+            mesh = labelled_mesh_from_grid(grid.volume, grid.labels, own, half_extent)
+            scored[own] = score_mesh(mesh, grid.truth, grid.seed)  # type: ignore[assignment]
+        scores.append({**scored[own], "level": own})
+    return scores
+
+
+def summarise_optical_depths(depths: tuple[float, ...], scores: list[list[SurfaceScore]]) -> list[dict[str, Any]]:
+    """Per candidate optical depth, the 3D metrics averaged over objects (as :func:`summarise_levels`) and the
+    mean of the objects' levels. ``scores[i][j]``: object i at depth j."""
+    rows = []
+    for j, row in enumerate(summarise_levels(tuple(depths), scores)):
+        mean_level = float(np.mean([s[j]["level"] for s in scores]))
+        rows.append({"optical_depth": row.pop("level"), **row, "mean_level": mean_level})
+    return rows
+
+
+def choose_optical_depth(rows: list[dict[str, Any]]) -> float:
+    """The optical depth with the highest mean F-score; ties: the higher 3D mIoU, then the smaller depth.
+
+    Example:
+        >>> choose_optical_depth([{"optical_depth": 0.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3},
+        ...                       {"optical_depth": 3.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3}])
+        0.0
+    """
+    best = max(rows, key=lambda r: (round(r["fscore_1cm"], 9), round(r["affordance_miou_3d"], 9), -r["optical_depth"]))
+    return float(best["optical_depth"])
+
+
 def _mean(values: list[float | None]) -> float | None:
     finite = [v for v in values if v is not None and math.isfinite(v)]
     return float(np.mean(finite)) if finite else None
@@ -193,13 +251,14 @@ def choose_level(rows: list[dict[str, Any]], previous: float) -> float:
     return float(best["level"])
 
 
-def store_surface_density(path: Path, level: float) -> None:
-    """Set ``surface_density`` of the model config stored in the checkpoint at ``path`` to ``level``, in place and
-    atomically (temporary file + rename); every other entry is kept."""
+def store_surface(path: Path, level: float, optical_depth: float) -> None:
+    """Set ``surface_density`` and ``surface_optical_depth`` of the model config stored in the checkpoint at
+    ``path``, in place and atomically (temporary file + rename); every other entry is kept."""
     data = load_checkpoint(path)
     if not isinstance(data.get("model_config"), dict):
         raise input_error(path, "checkpoint has no model config")
-    data["model_config"] = {**data["model_config"], "surface_density": float(level)}
+    surface = {"surface_density": float(level), "surface_optical_depth": float(optical_depth)}
+    data["model_config"] = {**data["model_config"], **surface}
     atomic_write(Path(path), lambda f: torch.save(data, f))
 
 
@@ -207,6 +266,8 @@ def check_config(config: CalibrateConfig) -> None:
     """Refuse settings that cannot give a sweep (no levels, a level ≤ 0, too coarse a grid, no objects)."""
     if not config.levels or any(not (math.isfinite(v) and v > 0) for v in config.levels):
         raise AffnerfError(f"--levels must be positive densities per metre, got {list(config.levels)}")
+    if not config.optical_depths or any(not (math.isfinite(v) and v >= 0) for v in config.optical_depths):
+        raise AffnerfError(f"--optical-depths must be non-negative (0 = off), got {list(config.optical_depths)}")
     if config.resolution < 2 or config.max_objects < 1 or config.input_views < 1:
         raise AffnerfError("--resolution must be at least 2, --max-objects and --input-views at least 1")
 
@@ -219,9 +280,23 @@ def _load(source: Path, ds: Dataset, device: str) -> LoadedModel:
     return loaded
 
 
+def calibration_grids(
+    method: ConditionedNeRFMethod, objects: list[ObjectData], config: CalibrateConfig
+) -> tuple[list[ObjectGrid], dict[str, list[int]]]:
+    """Each object's grid (encoded from the protocol's seeded input views) and those views, by object id."""
+    grids, views = [], {}
+    for obj in objects:
+        inputs = input_views(obj, config.input_views, config.seed)
+        volume, labels = object_grid(method, obj, inputs)
+        seed = sample_seed(config.seed, obj.record.object_id)
+        grids.append(ObjectGrid(volume, labels, true_samples(obj, config.seed), seed))
+        views[obj.record.object_id] = inputs
+    return grids, views
+
+
 def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
-    """Sweep the levels, write ``calibration.json`` and (unless ``dry_run``) store the chosen level in the
-    checkpoint; returns what was written."""
+    """Sweep the levels, then the optical depths at the chosen level, write ``calibration.json`` and (unless
+    ``dry_run``) store both choices in the checkpoint; returns what was written."""
     check_config(config)
     source = model_source(config)
     resolve_checkpoint(source)  # a missing run fails before the dataset is read
@@ -230,30 +305,31 @@ def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
     objects = calibration_objects(ds, config.split, config.max_objects, config.categories)
     method = ConditionedNeRFMethod(loaded, mesh_resolution=config.resolution)
     half_extent = loaded.model.config.scene_half_extent
-    scores, views = [], {}
-    for obj in objects:
-        inputs = input_views(obj, config.input_views, config.seed)
-        volume, labels = object_grid(method, obj, inputs)
-        truth = true_samples(obj, config.seed)
-        seed = sample_seed(config.seed, obj.record.object_id)
-        scores.append(sweep_grid(volume, labels, tuple(config.levels), half_extent, truth, seed))
-        views[obj.record.object_id] = inputs
+    grids, views = calibration_grids(method, objects, config)
+    levels, depths = tuple(config.levels), tuple(config.optical_depths)
     previous = float(loaded.model.config.surface_density)
-    rows = summarise_levels(tuple(config.levels), scores)
+    level_scores = [sweep_grid(g.volume, g.labels, levels, half_extent, g.truth, g.seed) for g in grids]
+    rows = summarise_levels(levels, level_scores)
     chosen = choose_level(rows, previous)
+    depth_scores = [sweep_optical_depths(g, depths, chosen, half_extent) for g in grids]
+    depth_rows = summarise_optical_depths(depths, depth_scores)
+    chosen_depth = choose_optical_depth(depth_rows)
     result = {
         "checkpoint": str(loaded.path),
         "split": config.split,
         "resolution": config.resolution,
         "levels": rows,
+        "optical_depths": depth_rows,
         "objects": views,
         "previous_level": previous,
         "chosen_level": chosen,
+        "previous_optical_depth": float(loaded.model.config.surface_optical_depth),
+        "chosen_optical_depth": chosen_depth,
         "stored": not config.dry_run,
     }
     write_json_atomic(calibration_path(source, config.out), result)
     if not config.dry_run:
-        store_surface_density(loaded.path, chosen)
+        store_surface(loaded.path, chosen, chosen_depth)
     return result
 
 
@@ -266,6 +342,14 @@ def sweep_lines(result: dict[str, Any]) -> list[str]:
             f"level {row['level']:g}/m: F@1cm {row['fscore_1cm']:.3f}  Chamfer {chamfer}  "
             f"3D mIoU {row['affordance_miou_3d']:.3f}  (empty {row['meshes_empty']}/{len(result['objects'])})"
         )
+    for row in result["optical_depths"]:
+        lines.append(
+            f"at {result['chosen_level']:g}/m, optical depth {row['optical_depth']:g}: F@1cm {row['fscore_1cm']:.3f}  "
+            f"3D mIoU {row['affordance_miou_3d']:.3f}  (mean level {row['mean_level']:.1f}/m)"
+        )
     where = f"stored in {result['checkpoint']}" if result["stored"] else "dry run: checkpoint unchanged"
-    lines.append(f"chosen level {result['chosen_level']:g}/m (was {result['previous_level']:g}/m; {where})")
+    lines.append(
+        f"chosen level {result['chosen_level']:g}/m (was {result['previous_level']:g}/m), optical depth "
+        f"{result['chosen_optical_depth']:g} (was {result['previous_optical_depth']:g}; {where})"
+    )
     return lines

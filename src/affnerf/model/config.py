@@ -46,6 +46,12 @@ class ModelConfig:
         surface_density: density (per metre) of the surface that mesh extraction puts at the object's boundary;
             predict, eval and the viewer use this value unless told otherwise. 50/m: a 1 cm slab at this density
             stops about 40 % of the light.
+        surface_optical_depth: when > 0, each object's mesh level is lowered below ``surface_density`` to the
+            level whose outline along each axis best matches where the field's optical depth along that axis
+            exceeds this value (:mod:`affnerf.predict.level`), so an object whose density rises slowly (a large
+            or hollow one) is meshed where it renders; 0 uses ``surface_density`` for every object. A departure
+            from the paper (which extracts no meshes), chosen with ``surface_density`` by ``affnerf eval
+            calibrate``.
         conditioning: how the trunk takes its per-point conditioning (the shape code, or PixelNeRF-M's features):
             ``concat`` joins it to PE(position) at the input and at the skip (the paper), ``film`` also scales and
             shifts every trunk layer's pre-activation by it (FiLM, as Occupancy Networks' CBN decoder).
@@ -70,6 +76,7 @@ class ModelConfig:
     clip_to_cube: bool = False
     scene_half_extent: float = CANONICAL_HALF_EXTENT
     surface_density: float = 50.0
+    surface_optical_depth: float = 0.0
     occupancy_density: float = 5.0
     conditioning: Literal["concat", "film"] = "concat"
 
@@ -84,5 +91,6 @@ NON_ARCHITECTURE_FIELDS = (
     "clip_to_cube",
     "scene_half_extent",
     "surface_density",
+    "surface_optical_depth",
     "occupancy_density",
 )

@@ -16,6 +16,7 @@ from skimage import measure
 from affnerf.meshio import LabelledMesh, face_areas, majority_face_labels
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import POINTS_PER_CHUNK
+from affnerf.predict.level import object_level
 from affnerf.rendering.grid import OccupancyGrid
 from affnerf.vocab import colorize_labels
 
@@ -136,6 +137,33 @@ def extract_labelled_mesh(
     return labelled_mesh_from_grid(volume, labels, level, half_extent, chunk)
 
 
+def model_surface(
+    model: ConditionedNeRF,
+    encoding: object,
+    resolution: int = 128,
+    level: float | None = None,
+    occupancy: OccupancyGrid | None = None,
+) -> tuple[LabelledMesh, float]:
+    """The labelled mesh of one encoded object in the model's scene cube, and the density level it was cut at.
+
+    Args:
+        model: a trained model.
+        encoding: one object's encoding (``model.encode_views`` / ``model.encode``).
+        resolution: marching-cubes samples per axis.
+        level: density of the surface; None takes the object's own level from the model config
+            (:func:`affnerf.predict.level.object_level`: ``surface_density``, lowered for a diffuse object when
+            ``surface_optical_depth`` is set).
+        occupancy: the object's occupancy grid (empty-space skipping), or None to evaluate everywhere.
+    """
+    density, labels = model.point_fields(encoding)
+    half = model.config.scene_half_extent
+    volume = evaluate_grid(density, resolution, half, occupancy=occupancy)
+    if level is None:
+        spacing = 2.0 * half / (resolution - 1)
+        level = object_level(volume, spacing, model.config.surface_density, model.config.surface_optical_depth)
+    return labelled_mesh_from_grid(volume, labels, level, half), float(level)
+
+
 def model_mesh(
     model: ConditionedNeRF,
     encoding: object,
@@ -143,20 +171,8 @@ def model_mesh(
     level: float | None = None,
     occupancy: OccupancyGrid | None = None,
 ) -> LabelledMesh:
-    """The labelled mesh of one encoded object in the model's scene cube.
-
-    Args:
-        model: a trained model.
-        encoding: one object's encoding (``model.encode_views`` / ``model.encode``).
-        resolution: marching-cubes samples per axis.
-        level: density of the surface; None takes the model config's ``surface_density``.
-        occupancy: the object's occupancy grid (empty-space skipping), or None to evaluate everywhere.
-    """
-    density, labels = model.point_fields(encoding)
-    surface = model.config.surface_density if level is None else level
-    return extract_labelled_mesh(
-        density, labels, resolution, surface, model.config.scene_half_extent, occupancy=occupancy
-    )
+    """The labelled mesh of :func:`model_surface` without its level."""
+    return model_surface(model, encoding, resolution, level, occupancy)[0]
 
 
 def class_areas(mesh: LabelledMesh) -> dict[int, float]:

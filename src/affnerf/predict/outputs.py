@@ -55,7 +55,8 @@ class PredictConfig:
         elevation: turntable camera elevation, degrees.
         radius: turntable camera distance, metres.
         resolution: marching-cubes grid resolution.
-        level: density of the extracted surface (None: the model config's ``surface_density``).
+        level: density of the extracted surface (None: the object's own level from the model config:
+            ``surface_density``, lowered for a diffuse object when ``surface_optical_depth`` is set).
         device: ``auto``, ``cpu`` or ``cuda``.
         chunk: rays per forward pass.
         fast: render and extract the mesh with the object's occupancy grid (empty-space skipping).
@@ -130,7 +131,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
         view = predictor.render(obj, intr, pose)
         rgb = np.round(view.rgb * 255).astype(np.uint8)
         frames.append(np.concatenate([rgb, overlay_affordance(rgb, view.labels)], axis=1))
-    mesh = predictor.mesh(obj, config.resolution, config.level)
+    mesh, level = predictor.surface(obj, config.resolution, config.level)
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out))
@@ -160,7 +161,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "object_bbox": list(obj.prepared.bbox),
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
-            **mesh_record(mesh, config.resolution, predictor.surface_level(config.level)),
+            **mesh_record(mesh, config.resolution, level),
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")

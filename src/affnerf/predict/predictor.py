@@ -26,7 +26,7 @@ from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import RenderedView, render_view
 from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.loading import LoadedModel, load_model
-from affnerf.predict.mesh import model_mesh
+from affnerf.predict.mesh import model_surface
 from affnerf.predict.segment import SegmentMethod
 from affnerf.rendering.grid import OccupancyGrid
 
@@ -134,10 +134,18 @@ class Predictor:
         )
 
     def surface_level(self, level: float | None = None) -> float:
-        """The density of extracted surfaces: ``level`` when given, else the model config's ``surface_density``."""
+        """The model's base density of extracted surfaces: ``level`` when given, else the model config's
+        ``surface_density`` (an object's own level may lie below it: :meth:`surface`)."""
         return self.loaded.model.config.surface_density if level is None else float(level)
 
+    def surface(
+        self, obj: EncodedObject, resolution: int = 128, level: float | None = None
+    ) -> tuple[LabelledMesh, float]:
+        """The labelled mesh of the object (marching cubes in the model's scene cube) and the density it was cut
+        at: ``level`` when given, else the object's own level (:func:`affnerf.predict.level.object_level`)."""
+        grid = self.grid(obj) if self.fast else None
+        return model_surface(self.loaded.model, obj.codes, resolution, level, grid)
+
     def mesh(self, obj: EncodedObject, resolution: int = 128, level: float | None = None) -> LabelledMesh:
-        """The labelled mesh of the object (marching cubes in the model's scene cube, at the model's surface
-        density unless ``level`` is given)."""
-        return model_mesh(self.loaded.model, obj.codes, resolution, level, self.grid(obj) if self.fast else None)
+        """The labelled mesh of :meth:`surface`."""
+        return self.surface(obj, resolution, level)[0]
