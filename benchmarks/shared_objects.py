@@ -10,8 +10,9 @@ For each object it
    azimuths 0, 60, ..., 300 degrees (0 = the object's front, -y) at 30 degrees elevation and 0.7 m, inside the
    training cameras' band (conventions section 1: elevation 10-80 degrees, distance 0.5-0.9 m);
 2. predicts from each photo alone with the checkpoint through :class:`~affnerf.predict.predictor.Predictor`, as
-   ``affnerf predict`` does (the photo separated with ``segment="auto"``, the labelled mesh at the model's own
-   ``surface_density``, marching cubes at 128), renders one novel view from a fixed canonical camera (the same
+   ``affnerf predict`` does (the photo separated with ``segment="auto"``, the labelled mesh at the object's own
+   level: ``surface_density``, lowered per object by ``surface_optical_depth``; marching cubes at 128), renders one
+   novel view from a fixed canonical camera (the same
    for all six inputs) and scores the mesh against the true mesh (F-score at 1 cm and 3D affordance mIoU, with
    :mod:`affnerf.eval.surface`) and the novel view's labels against the true affordance map there (2D mIoU,
    background counted as in conventions section 5, and its object-only variant);
