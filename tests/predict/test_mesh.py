@@ -1,13 +1,18 @@
-"""Marching cubes on analytic fields: the surface is where it should be and labels carry over."""
+"""Marching cubes on analytic fields (the surface is where it should be and labels carry over), and the level a
+trained model's mesh is cut at."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import torch
 import trimesh
 
 from affnerf.meshio import majority_face_labels
-from affnerf.predict.mesh import class_areas, extract_labelled_mesh
+from affnerf.predict.level import object_level
+from affnerf.predict.loading import load_model
+from affnerf.predict.mesh import class_areas, evaluate_grid, extract_labelled_mesh, model_surface
 
 
 def _sphere(radius: float, sharpness: float = 0.01):
@@ -42,3 +47,18 @@ def test_face_label_is_the_majority_of_its_vertices():
     faces = np.array([[0, 1, 2], [0, 1, 3], [1, 2, 3]])
     labels = np.array([4, 4, 5, 5])
     assert majority_face_labels(faces, labels).tolist() == [4, 4, 5]
+
+
+def test_an_objects_own_level_is_the_one_the_mesh_is_cut_at(trained_runs):
+    """With ``surface_optical_depth`` set, model_surface cuts at object_level of the same grid; a given level wins."""
+    model = load_model(trained_runs["affnerf"], "cpu").model
+    model.config = replace(model.config, surface_density=2.0, surface_optical_depth=0.01)
+    codes = model.encode(torch.rand(1, 3, model.config.encoder_resolution, model.config.encoder_resolution))
+    half = model.config.scene_half_extent
+    volume = evaluate_grid(model.point_fields(codes)[0], 20, half)
+    expected = object_level(volume, 2 * half / 19, 2.0, 0.01)
+    mesh, level = model_surface(model, codes, resolution=20)
+    assert level == expected <= 2.0
+    assert model_surface(model, codes, resolution=20, level=0.7)[1] == 0.7
+    model.config = replace(model.config, surface_optical_depth=0.0)
+    assert model_surface(model, codes, resolution=20)[1] == 2.0
