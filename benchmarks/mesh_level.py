@@ -48,12 +48,14 @@ def parse() -> argparse.Namespace:
     return parser.parse_args()
 
 
-def per_category(categories: list[str], scores: list[list[dict]], rules: list[str]) -> dict:
+def per_category(
+    categories: list[str], scores: list[list[dict]], depths: tuple[float, float], rules: list[str]
+) -> dict:
     """Per category and rule, the mean of each 3D metric (Chamfer over non-empty meshes)."""
     table: dict[str, Any] = {}
     for cat in sorted(set(categories)):
         rows = [s for s, c in zip(scores, categories, strict=True) if c == cat]
-        table[cat] = {rule: summarise_optical_depths((0.0,), [[r[j]] for r in rows])[0] for j, rule in enumerate(rules)}
+        table[cat] = dict(zip(rules, summarise_optical_depths(depths, rows), strict=True))
     return table
 
 
@@ -97,7 +99,7 @@ def main() -> None:
             o.record.object_id: {"views": views[o.record.object_id], "scores": s}
             for o, s in zip(objects, scores, strict=True)
         },  # fmt: skip
-        "categories": per_category(categories, scores, rules),
+        "categories": per_category(categories, scores, (0.0, depth), rules),
         "mean": dict(zip(rules, summarise_optical_depths((0.0, depth), scores), strict=True)),
         "seconds": round(time.perf_counter() - start, 1),
     }

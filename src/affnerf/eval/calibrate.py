@@ -169,12 +169,17 @@ class ObjectGrid:
 
 @torch.no_grad()
 def sweep_optical_depths(
-    grid: ObjectGrid, depths: tuple[float, ...], level: float, half_extent: float
+    grid: ObjectGrid,
+    depths: tuple[float, ...],
+    level: float,
+    half_extent: float,
+    scored: dict[float, SurfaceScore] | None = None,
 ) -> list[SurfaceScore]:
     """One object's 3D scores with each candidate ``surface_optical_depth`` at base level ``level`` (each score
-    also gives the object's ``level``); depths that give the same level share one mesh."""
+    also gives the object's ``level``); depths that give the same level share one mesh, and ``scored`` (level ->
+    score, e.g. the level sweep's score at ``level``) saves meshing those levels again."""
     spacing = 2.0 * half_extent / (grid.volume.shape[0] - 1)
-    scored: dict[float, SurfaceScore] = {}
+    scored = dict(scored or {})
     scores = []
     for depth in depths:
         own = object_level(grid.volume, spacing, level, depth)
@@ -311,7 +316,11 @@ def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
     level_scores = [sweep_grid(g.volume, g.labels, levels, half_extent, g.truth, g.seed) for g in grids]
     rows = summarise_levels(levels, level_scores)
     chosen = choose_level(rows, previous)
-    depth_scores = [sweep_optical_depths(g, depths, chosen, half_extent) for g in grids]
+    at_chosen = levels.index(chosen)
+    depth_scores = [
+        sweep_optical_depths(g, depths, chosen, half_extent, {chosen: s[at_chosen]})
+        for g, s in zip(grids, level_scores, strict=True)
+    ]
     depth_rows = summarise_optical_depths(depths, depth_scores)
     chosen_depth = choose_optical_depth(depth_rows)
     result = {
