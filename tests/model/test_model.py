@@ -11,7 +11,7 @@ import torch
 from affnerf.model.affnerf import AffNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
-from affnerf.model.field import ConditionalField
+from affnerf.model.field import ConditionalField, ObjectCodes
 from affnerf.model.resnet import CodeEncoder, ResNet18
 
 SMALL = ModelConfig(
@@ -145,6 +145,31 @@ def test_a_fresh_film_field_equals_the_concatenating_one_and_film_lets_the_code_
         film.film.bias[:32] = 1.0  # gamma of the first layer: its pre-activation doubles
     assert not torch.allclose(film.density_only(pts, code), plain.density_only(pts, code))
     assert film.film.out_features == 2 * 32 * 4
+
+
+@pytest.mark.parametrize("film", [False, True])
+def test_factored_object_codes_give_the_field_and_its_gradients_that_per_point_codes_give(film):
+    torch.manual_seed(3)
+    field = ConditionalField(num_classes=4, code_dim=16, width=32, depth=4, film=film)
+    if film:
+        torch.nn.init.normal_(field.film.weight, std=0.1)
+    shape, appearance = torch.randn(3, 16, requires_grad=True), torch.randn(3, 16, requires_grad=True)
+    pick = torch.nn.functional.one_hot(torch.tensor([0, 2, 2, 1, 0, 1, 2]), 3).float()
+    pts, dirs = torch.rand(7, 3) - 0.5, torch.nn.functional.normalize(torch.randn(7, 3), dim=-1)
+
+    def outputs(s, a):
+        out = field(pts, dirs, s, a)
+        return torch.cat([out.sigma[:, None], out.rgb, out.logits], dim=-1)
+
+    factored = outputs(ObjectCodes(shape, pick), ObjectCodes(appearance, pick))
+    per_point = outputs(pick @ shape, pick @ appearance)
+    torch.testing.assert_close(factored, per_point)
+    grads = [
+        torch.autograd.grad(o.square().sum(), [shape, appearance, field.trunk_layers[0].weight])
+        for o in (factored, per_point)
+    ]
+    for g_factored, g_point in zip(*grads, strict=True):
+        torch.testing.assert_close(g_factored, g_point)
 
 
 @pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU (CI machines have none)")

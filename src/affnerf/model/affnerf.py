@@ -8,6 +8,7 @@ import torch
 
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
+from affnerf.model.field import ObjectCodes
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.model.resnet import CodeEncoder
 
@@ -59,11 +60,12 @@ class AffNeRF(ConditionedNeRF):
 
         The codes are picked with a one-hot product rather than indexing: the gradient of an indexed read sums
         many points into few rows in an order that varies between runs on a multi-core CPU, and a resumed run must
-        end with the same weights as an uninterrupted one.
+        end with the same weights as an uninterrupted one. They stay factored (:class:`ObjectCodes`): the field
+        multiplies each object's code with its weights once, not once per point.
         """
 
-        def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes, ObjectCodes]:
             pick = torch.nn.functional.one_hot(ray_object[rays], encoding.shape.shape[0]).to(encoding.shape.dtype)
-            return pick @ encoding.shape, pick @ encoding.appearance
+            return ObjectCodes(encoding.shape, pick), ObjectCodes(encoding.appearance, pick)
 
         return cond

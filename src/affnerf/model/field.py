@@ -7,12 +7,64 @@ head does), so affordance is a property of the point, not of the viewpoint.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import torch
 from torch import nn
 
 from affnerf.model.encoding import encoding_dim, positional_encoding
+
+
+@dataclass(frozen=True)
+class ObjectCodes:
+    """Codes shared by all points of an object, kept factored: point i's code is ``table[object of i]``.
+
+    A layer that concatenates a code to per-point inputs multiplies the code's columns of its weight with the same
+    code for every point of an object; factored, :func:`linear_with_code` does that product once per object and
+    picks the result per point, which makes the code's size nearly free (conditioning on concatenated global codes,
+    the AFF-NeRF field). Per-point features that differ between points (pixel-aligned ones) stay plain tensors.
+
+    Attributes:
+        table: (B, D) one code per object.
+        pick: (N, B) one-hot rows: the object of each point (a product rather than indexing keeps the gradient's
+            summation order fixed, see :meth:`affnerf.model.affnerf.AffNeRF.condition`).
+    """
+
+    table: torch.Tensor
+    pick: torch.Tensor
+
+    def __len__(self) -> int:
+        return self.pick.shape[0]
+
+    def per_point(self) -> torch.Tensor:
+        """(N, D) the code of every point."""
+        return self.pick @ self.table
+
+    def apply(self, fn: Callable[[torch.Tensor], torch.Tensor]) -> torch.Tensor:
+        """(N, ...) ``fn`` of each point's code, computed once per object."""
+        return self.pick @ fn(self.table)
+
+
+Code = torch.Tensor | ObjectCodes
+
+
+def linear_with_code(layer: nn.Linear, x: torch.Tensor, code: Code) -> torch.Tensor:
+    """``layer(cat([x, code], -1))`` for (N, Dx) inputs and (N, D) codes; an :class:`ObjectCodes` code's product
+    with its weight columns is computed once per object.
+
+    Example:
+        >>> layer = nn.Linear(3, 2); x = torch.randn(4, 1); table = torch.randn(2, 2)
+        >>> pick = torch.nn.functional.one_hot(torch.tensor([0, 1, 1, 0]), 2).float()
+        >>> codes = ObjectCodes(table, pick)
+        >>> torch.allclose(linear_with_code(layer, x, codes), linear_with_code(layer, x, codes.per_point()))
+        True
+    """
+    if not isinstance(code, ObjectCodes):
+        return layer(torch.cat([x, code], dim=-1))
+    d = code.table.shape[-1]
+    w = layer.weight
+    return nn.functional.linear(x, w[:, :-d]) + code.apply(lambda t: nn.functional.linear(t, w[:, -d:], layer.bias))
 
 
 @dataclass(frozen=True)
@@ -89,17 +141,22 @@ class ConditionalField(nn.Module):
             nn.Linear(color_width, 3),
         )
 
-    def trunk(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:
-        """(N, width) trunk features of (N, 3) points under (N, code_dim) shape codes."""
-        x_in = torch.cat([positional_encoding(points, self.pe_xyz), shape_code], dim=-1)
+    def trunk(self, points: torch.Tensor, shape_code: Code) -> torch.Tensor:
+        """(N, width) trunk features of (N, 3) points under (N, code_dim) shape codes (a tensor or factored)."""
+        pe = positional_encoding(points, self.pe_xyz)
         mods = None
         if self.film is not None:  # (N, depth, 2, width): each layer's gamma and beta
-            mods = self.film(shape_code).reshape(len(points), len(self.trunk_layers), 2, self.width)
-        h = x_in
+            film = self.film
+            mods = shape_code.apply(film) if isinstance(shape_code, ObjectCodes) else film(shape_code)
+            mods = mods.reshape(len(points), len(self.trunk_layers), 2, self.width)
+        h = pe
         for i, layer in enumerate(self.trunk_layers):
-            if i == self.skip:
-                h = torch.cat([h, x_in], dim=-1)
-            h = layer(h)
+            if i == 0:
+                h = linear_with_code(layer, pe, shape_code)
+            elif i == self.skip:  # the input again: [h, PE(x), code]
+                h = linear_with_code(layer, torch.cat([h, pe], dim=-1), shape_code)
+            else:
+                h = layer(h)
             if mods is not None:
                 h = h * (1.0 + mods[:, i, 0]) + mods[:, i, 1]
             h = torch.relu(h)
@@ -109,27 +166,27 @@ class ConditionalField(nn.Module):
         """(N,) non-negative density from trunk features (softplus, shifted so a fresh field starts nearly empty)."""
         return nn.functional.softplus(self.density(h)[..., 0] - 1.0)
 
-    def forward(
-        self, points: torch.Tensor, dirs: torch.Tensor, shape_code: torch.Tensor, appearance_code: torch.Tensor
-    ) -> FieldOutput:
+    def forward(self, points: torch.Tensor, dirs: torch.Tensor, shape_code: Code, appearance_code: Code) -> FieldOutput:
         """Evaluate the field.
 
         Args:
             points: (N, 3) positions in the canonical frame.
             dirs: (N, 3) unit view directions.
-            shape_code: (N, code_dim) shape code of each point's object.
-            appearance_code: (N, code_dim) appearance code of each point's object.
+            shape_code: (N, code_dim) shape code of each point's object (a tensor or :class:`ObjectCodes`).
+            appearance_code: (N, code_dim) appearance code of each point's object (likewise).
         """
         h = self.trunk(points, shape_code)
         q = self.feature(h)
-        d_in = torch.cat([q, positional_encoding(dirs, self.pe_dir), appearance_code], dim=-1)
-        return FieldOutput(sigma=self.density_from(h), rgb=torch.sigmoid(self.color(d_in)), logits=self.affordance(q))
+        view = torch.cat([q, positional_encoding(dirs, self.pe_dir)], dim=-1)
+        hidden = linear_with_code(self.color[0], view, appearance_code)
+        rgb = torch.sigmoid(self.color[2](torch.relu(hidden)))
+        return FieldOutput(sigma=self.density_from(h), rgb=rgb, logits=self.affordance(q))
 
-    def density_only(self, points: torch.Tensor, shape_code: torch.Tensor) -> torch.Tensor:
+    def density_only(self, points: torch.Tensor, shape_code: Code) -> torch.Tensor:
         """(N,) density alone, for mesh extraction and occupancy grids."""
         return self.density_from(self.trunk(points, shape_code))
 
-    def geometry(self, points: torch.Tensor, shape_code: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def geometry(self, points: torch.Tensor, shape_code: Code) -> tuple[torch.Tensor, torch.Tensor]:
         """(N,) density and (N, C - 1) affordance logits at points (no colour), for labelling meshes."""
         h = self.trunk(points, shape_code)
         return self.density_from(h), self.affordance(self.feature(h))

@@ -2,7 +2,8 @@
 
 What conditions the field differs between models (global codes for AFF-NeRF, pixel-aligned features for
 PixelNeRF, nothing for a per-object Semantic-NeRF); it is passed in as a callable
-``condition(points (N, 3), rays (N,)) -> (trunk input (N, Dt), colour input (N, Dc))``.
+``condition(points (N, 3), rays (N,)) -> (trunk input (N, Dt), colour input (N, Dc))``, each a tensor or, for codes
+shared by an object's points, a factored :class:`~affnerf.model.field.ObjectCodes`.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import torch
 from torch import nn
 
 from affnerf.model.config import ModelConfig
-from affnerf.model.field import ConditionalField
+from affnerf.model.field import Code, ConditionalField
 from affnerf.rendering.grid import OccupancyGrid, occupied_samples
 from affnerf.rendering.rays import intersect_aabb
 from affnerf.rendering.samplers import merge_samples, pdf_samples, stratified_samples
@@ -27,7 +28,7 @@ from affnerf.rendering.volume import (
     weights_from_density,
 )
 
-Condition = Callable[[torch.Tensor, torch.Tensor], tuple[torch.Tensor, torch.Tensor]]
+Condition = Callable[[torch.Tensor, torch.Tensor], tuple[Code, Code]]
 
 
 @dataclass
