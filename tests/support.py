@@ -50,6 +50,8 @@ def train_argv(config: TrainConfig, *extra: str) -> list[str]:
             values[name.replace("_", "-")] = getattr(config, name)
     if config.cache_dir is not None:
         values["cache-dir"] = config.cache_dir
+    if config.init_from is not None:
+        values["init-from"] = config.init_from
     for f in fields(config.model):
         value = getattr(config.model, f.name)
         if value != getattr(SMALL.model, f.name):

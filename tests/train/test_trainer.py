@@ -84,6 +84,28 @@ def test_interrupted_and_resumed_run_ends_with_the_same_weights(tiny_train_confi
     assert a["optimizer"]["state"][0]["step"] == b["optimizer"]["state"][0]["step"]
 
 
+def test_a_run_started_from_another_runs_weights_begins_where_that_run_ended_with_a_fresh_schedule(
+    tiny_train_config, tmp_path, capsys
+):
+    first = tiny_train_config(out=tmp_path / "first", steps=10)
+    train(first)
+    ended = torch.load(first.out / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
+    second = tiny_train_config(out=tmp_path / "second", steps=4, checkpoint_every=4, init_from=first.out)
+    trainer = Trainer(second, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    for key, value in trainer.state.model.state_dict().items():
+        assert torch.equal(value, ended[key]), key
+    assert trainer.step == 0 and not trainer.state.optimizer.state_dict()["state"]
+    assert trainer.train_iteration(0)["train/lr"] == second.optim.lr  # its own schedule, from the start
+    fresh = Trainer(replace(second, out=tmp_path / "fresh", init_from=None), trainer.ctx)
+    fresh.setup()
+    assert not all(torch.equal(v, ended[k]) for k, v in fresh.state.model.state_dict().items())
+    wider = replace(second, out=tmp_path / "wider", model=replace(second.model, field_width=48))
+    assert main(train_argv(wider)) == 2
+    assert "checkpoint is from another configuration (field_width 32 vs 48)" in capsys.readouterr().err
+    assert main(train_argv(replace(wider, init_from=tmp_path / "nothing"))) == 2
+
+
 def test_train_iteration_takes_exactly_one_step_and_hooks_do_the_rest(tiny_train_config):
     config = tiny_train_config(steps=4, checkpoint_every=2)
     trainer = Trainer(config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))

@@ -80,6 +80,10 @@ class TrainConfig:
             continues to ``steps`` (0 = run to the end).
         time_limit: end this invocation after this many minutes with a checkpoint (0 = no limit); for machines
             lent in short slots: rerun with ``--resume`` until done.
+        init_from: start from the weights of this checkpoint (a ``.pt`` file, the shipped model's included, or a
+            run folder: its last checkpoint) instead of the seed's initialisation; the architecture must match.
+            The optimiser, the step count and the learning-rate schedule start afresh (fine-tuning, or a second
+            stage with its own schedule). Ignored when resuming (the run's own checkpoint wins).
     """
 
     data: Path
@@ -118,6 +122,7 @@ class TrainConfig:
     progress: bool = True
     stop_at: int = 0
     time_limit: float = 0.0
+    init_from: Path | None = None
 
 
 #: The paper's configuration (conventions §4): two ResNet18s, codes of 32, PE 10/4, 64 + 128 samples over the full
@@ -185,7 +190,7 @@ def config_from_json(data: dict[str, Any], path: Path) -> TrainConfig:
         model = ModelConfig(**data.get("model", {}))
         optim = OptimConfig(**data.get("optim", {}))
         top = {k: v for k, v in data.items() if k not in ("model", "optim")}
-        for key in ("data", "out", "cache_dir"):
+        for key in ("data", "out", "cache_dir", "init_from"):
             if top.get(key) is not None:
                 top[key] = Path(top[key])
         return TrainConfig(**top, model=model, optim=optim)

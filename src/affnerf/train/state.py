@@ -26,6 +26,26 @@ from affnerf.train.sampler import PointSampler, RaySampler
 log = logging.getLogger(__name__)
 
 
+def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> Path:
+    """Load the weights of ``source`` (a checkpoint file, or a run folder's last checkpoint) into ``model``,
+    refusing another architecture or class count; returns the checkpoint read.
+
+    Raises:
+        AffnerfError: naming the path, when it holds no checkpoint or an incompatible one.
+    """
+    source = Path(source)
+    path = source
+    if source.is_dir():
+        found = list_checkpoints(source / "checkpoints") if (source / "checkpoints").is_dir() else []
+        if not found:
+            raise AffnerfError(f"{source}: --init-from names a folder with no checkpoints/step_*.pt")
+        path = found[-1]
+    data = load_checkpoint(path)
+    check_compatible(data, model.config, num_classes, path)
+    model.load_state_dict(data["model"])
+    return path
+
+
 def prepare_run_folder(config: TrainConfig, ctx: dist_utils.Context) -> Path | None:
     """The checkpoint to resume from (or None); refuses to overwrite an existing run without ``--resume``.
 

@@ -39,7 +39,7 @@ from affnerf.train.logger import MetricsLogger
 from affnerf.train.loss import class_weights, nerf_loss, occupancy_slab, point_loss, ray_geometry_loss
 from affnerf.train.points import PointSet
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
-from affnerf.train.state import TrainingState, params_checksum, prepare_run_folder
+from affnerf.train.state import TrainingState, initial_weights, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
 
@@ -202,8 +202,8 @@ class Trainer:
 
     def setup(self) -> None:
         """Open the dataset, prepare the run folder, cache the training frames (and, with ``points_weight`` > 0,
-        the point sets), build the model, optimiser and samplers, restore the last checkpoint when resuming, and
-        make the logger, progress bar and hooks."""
+        the point sets), build the model, optimiser and samplers, restore the last checkpoint when resuming (or
+        load ``init_from``'s weights), and make the logger, progress bar and hooks."""
         config, ctx = self.config, self.ctx
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
@@ -218,6 +218,9 @@ class Trainer:
             self.state.points = PointSampler(points, config.points_per_object, config.seed, ctx.rank)
         if resume_from is not None:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
+        elif config.init_from is not None:
+            source = initial_weights(config.init_from, self.state.model, len(self.dataset.affordance_classes))
+            log.info("started from the weights of %s", source)
         self.net = TrainingPass(self.state.model)
         if ctx.distributed:
             device_ids = [ctx.device.index] if ctx.device.type == "cuda" else None
