@@ -10,7 +10,7 @@ import pytest
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.raycast import FrameCaster
 from affnerf.data.writer import surface_from_record
-from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate
+from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate, merge_metrics
 from affnerf.eval.report import table2_markdown
 from affnerf.meshio import LabelledMesh, read_labelled_ply
 from affnerf.metrics.surface import SURFACE_KEYS
@@ -81,3 +81,22 @@ def test_stability_of_the_oracle_is_zero_and_the_tables_mark_the_lowest_chamfer(
     two_d = evaluate(TrueMeshMethod(), objects[0], ProtocolConfig(target_views=2, scale=0.25), "test", objects[1])
     assert not set(SURFACE_KEYS) & set(two_d.to_json()["mean"]) and "stability" not in two_d.to_json()
     assert "3D (conventions" not in table2_markdown([two_d.to_json()])
+
+
+def test_evaluations_of_disjoint_categories_merge_into_the_evaluation_of_all(objects):
+    everything, num_classes = objects
+    whole = evaluate(TrueMeshMethod(), everything, PROTOCOL, "test", num_classes).to_json()
+    categories = sorted({o.record.category for o in everything})
+    assert len(categories) == 2
+    parts = [
+        evaluate(TrueMeshMethod(), [o for o in everything if o.record.category == c], PROTOCOL, "test", num_classes)
+        for c in categories
+    ]
+    merged = merge_metrics([p.to_json() for p in reversed(parts)])
+    assert merged["categories"] == whole["categories"] and list(merged["categories"]) == categories
+    assert merged["mean"] == pytest.approx(whole["mean"])
+    with pytest.raises(ValueError, match="evaluated twice"):
+        merge_metrics([parts[0].to_json(), parts[0].to_json()])
+    other = {**parts[1].to_json(), "method": "retrieval"}
+    with pytest.raises(ValueError, match="different methods"):
+        merge_metrics([parts[0].to_json(), other])

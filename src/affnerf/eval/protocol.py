@@ -168,18 +168,48 @@ class EvalResult:
                 m.update(category_surface(c.surface))
             m.update(objects=c.objects, views=c.views)
             cats[name] = m
-        mean: dict[str, Any] = {}
-        for key in METRIC_KEYS:
-            values = [m[key] for m in cats.values() if m[key] is not None and np.isfinite(m[key])]
-            mean[key] = float(np.mean(values)) if values else None
-        if self.metrics_3d:
-            mean.update(mean_surface(list(cats.values())))
-        mean["objects"] = sum(m["objects"] for m in cats.values())
-        mean["views"] = sum(m["views"] for m in cats.values())
-        out = {"categories": cats, "mean": mean, "method": self.method, "split": self.split}
+        out = {"categories": cats, "mean": category_mean(cats, self.metrics_3d), "method": self.method}
+        out["split"] = self.split
         if self.stability_views:
             out["stability"] = stability_json(self.stability, self.stability_views)
         return out
+
+
+def category_mean(cats: dict[str, dict[str, Any]], metrics_3d: bool) -> dict[str, Any]:
+    """The ``mean`` section of ``metrics.json``: each metric averaged over the categories where it is finite, the
+    3D metrics likewise (``meshes_empty`` summed), objects and views summed."""
+    mean: dict[str, Any] = {}
+    for key in METRIC_KEYS:
+        values = [m[key] for m in cats.values() if m[key] is not None and np.isfinite(m[key])]
+        mean[key] = float(np.mean(values)) if values else None
+    if metrics_3d:
+        mean.update(mean_surface(list(cats.values())))
+    mean["objects"] = sum(m["objects"] for m in cats.values())
+    mean["views"] = sum(m["views"] for m in cats.values())
+    return mean
+
+
+def merge_metrics(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """One method's ``metrics.json`` from evaluations of disjoint categories (run side by side, one per core):
+    their categories together and the mean over all of them, as one evaluation of every category gives.
+
+    Raises:
+        ValueError: when the parts are of different methods or splits, overlap in a category, or carry view
+            stability (its spreads need the per-object records; evaluate it in one run).
+    """
+    if len({(p["method"], p["split"]) for p in parts}) != 1:
+        raise ValueError("merge_metrics: the parts are of different methods or splits")
+    if any("stability" in p for p in parts):
+        raise ValueError("merge_metrics: view stability cannot be merged; evaluate it in one run")
+    cats: dict[str, dict[str, Any]] = {}
+    for part in parts:
+        twice = sorted(set(part["categories"]) & set(cats))
+        if twice:
+            raise ValueError(f"merge_metrics: categories evaluated twice: {twice}")
+        cats.update(part["categories"])
+    metrics_3d = any("fscore_1cm" in m for m in cats.values())
+    merged = {"categories": dict(sorted(cats.items())), "mean": category_mean(cats, metrics_3d)}
+    return {**merged, "method": parts[0]["method"], "split": parts[0]["split"], "settings": parts[0].get("settings")}
 
 
 def object_targets(obj: ObjectData, targets: list[int], scale: float) -> tuple[TargetSet, np.ndarray, np.ndarray]:
