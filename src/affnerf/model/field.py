@@ -63,6 +63,8 @@ def linear_with_code(layer: nn.Linear, x: torch.Tensor, code: Code) -> torch.Ten
     if not isinstance(code, ObjectCodes):
         return layer(torch.cat([x, code], dim=-1))
     d = code.table.shape[-1]
+    if d == 0:
+        return layer(x)
     w = layer.weight
     return nn.functional.linear(x, w[:, :-d]) + code.apply(lambda t: nn.functional.linear(t, w[:, -d:], layer.bias))
 

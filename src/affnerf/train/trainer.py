@@ -220,7 +220,8 @@ class Trainer:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
         elif config.init_from is not None:
             source = initial_weights(config.init_from, self.state.model, len(self.dataset.affordance_classes))
-            log.info("started from the weights of %s", source)
+            if ctx.is_main:
+                log.info("started from the weights of %s", source)
         self.net = TrainingPass(self.state.model)
         if ctx.distributed:
             device_ids = [ctx.device.index] if ctx.device.type == "cuda" else None
