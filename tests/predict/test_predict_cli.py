@@ -62,6 +62,22 @@ def test_predict_writes_every_output(trained_runs, photo, tmp_path, capsys, kind
     assert len(mesh.faces) > 0 and "affordance" in mesh.vertex_props and mesh.vertex_colors is not None
     assert set(summary["surface_area_m2"]) == set(summary["classes_present"]) and summary["classes_present"]
     assert (out / "affordance_model.glb").stat().st_size > 0
+    fit = summary["fit"]  # test-time inversion is on by default
+    assert fit["steps"] == 30 and set(fit["camera"]) == {"azimuth_deg", "elevation_deg", "distance_m"}
+    assert 0.0 <= fit["silhouette_iou"] <= 1.0 and fit["loss_after"] >= 0.0
+
+
+def test_fit_steps_zero_keeps_the_encoders_codes(trained_runs, photo, tmp_path):
+    common = ["predict", "--run", str(trained_runs["affnerf"]), "--image", str(photo["rgb"]), "--views", "1",
+              "--width", "32", "--height", "24", "--resolution", "16", "--level", "0.5", "--device", "cpu",
+              "--grid-threshold", "0.1"]  # fmt: skip
+    assert main([*common, "--out", str(tmp_path / "plain"), "--fit-steps", "0"]) == 0
+    assert main([*common, "--out", str(tmp_path / "fit"), "--fit-steps", "5"]) == 0
+    plain = json.loads((tmp_path / "plain" / "prediction.json").read_text())
+    fitted = json.loads((tmp_path / "fit" / "prediction.json").read_text())
+    assert plain["fit"] is None and fitted["fit"]["steps"] == 5
+    frames = [np.asarray(Image.open(tmp_path / name / "turntable/000.png")) for name in ("plain", "fit")]
+    assert not np.array_equal(frames[0], frames[1])  # the fitted codes render another object
 
 
 def test_blank_and_missing_images_are_one_line_errors_and_keep_earlier_outputs(trained_runs, photo, tmp_path, capsys):

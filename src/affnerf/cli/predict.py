@@ -16,7 +16,10 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
 
     The object is separated from its background (--mask, else --segment: by default the image's alpha, else a
     uniform background when the border is of one colour, else the salient-object model of the optional extra
-    affnerf[segment]), cropped, centred and resized the way training saw objects. Writes OUT/input.png,
+    affnerf[segment]), cropped, centred and resized the way training saw objects, and encoded. Unless --fit-steps
+    is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is searched,
+    assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on a CPU).
+    Writes OUT/input.png,
     OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/turntable/*.png and
     OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply (vertex colours and an integer vertex
     property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped

@@ -4,7 +4,8 @@
 fix and pass back with ``--mask``), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
 ``affordance_model.ply`` (vertex colours and an integer vertex property ``affordance``),
 ``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, how confidently the object
-was separated from its background, the mesh or why there is none, the files written).
+was separated from its background, the photo's camera and the fit to the photo, the mesh or why there is none, the
+files written).
 Files are assembled in a temporary folder and moved into place at the end, so a failure leaves an earlier
 prediction in the folder untouched.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import shutil
 import tempfile
@@ -28,6 +30,7 @@ from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.pictures.compose import overlay_affordance
 from affnerf.predict.image import save_mask
+from affnerf.predict.invert import InversionConfig, InversionResult
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
 from affnerf.predict.segment import SegmentMethod
@@ -62,6 +65,10 @@ class PredictConfig:
         fast: render and extract the mesh with the object's occupancy grid (empty-space skipping).
         grid_threshold: density above which a cell of the occupancy grid counts as occupied (None: the model
             config's ``occupancy_density``).
+        fit_steps: steps of test-time inversion (:mod:`affnerf.predict.invert`): the photo's camera is searched
+            and the encoder's codes are fitted to the photo's crop before anything is rendered or meshed; the
+            camera found and the fit's losses go to ``prediction.json`` under ``fit``. 0 keeps the encoder's codes.
+        fov: the photo's horizontal field of view, degrees (only the fit uses it).
     """
 
     image: Path
@@ -80,6 +87,24 @@ class PredictConfig:
     chunk: int = RAYS_PER_CHUNK
     fast: bool = True
     grid_threshold: float | None = None
+    fit_steps: int = 30
+    fov: float = 60.0
+
+
+def fit_record(result: InversionResult, steps: int) -> dict[str, Any]:
+    """The ``fit`` entry of ``prediction.json``: the photo's camera in the canonical frame and the fit's losses."""
+    az, el, dist = result.camera
+    return {
+        "steps": steps,
+        "camera": {
+            "azimuth_deg": round(math.degrees(az), 2),
+            "elevation_deg": round(math.degrees(el), 2),
+            "distance_m": round(dist, 4),
+        },  # fmt: skip
+        "silhouette_iou": round(result.search_iou, 4),
+        "loss_before": round(result.loss_start, 5),
+        "loss_after": round(result.loss_end, 5),
+    }
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
@@ -125,6 +150,8 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     ``mesh_note`` saying why, and a one-line warning names the checkpoint and the image.
     """
     obj = predictor.encode_image(config.image, config.mask, config.segment)
+    if config.fit_steps > 0:
+        predictor.fit(obj, InversionConfig(steps=config.fit_steps), math.radians(config.fov))
     intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)
     frames = []
     for pose in turntable_poses(config.views, config.elevation, config.radius):
@@ -162,6 +189,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
             **mesh_record(mesh, config.resolution, level),
+            "fit": fit_record(obj.inversion, config.fit_steps) if obj.inversion is not None else None,
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")

@@ -5,6 +5,7 @@ Python use::
     from affnerf.predict.predictor import Predictor
     p = Predictor.load("runs/mini")                      # a run folder or a checkpoint
     obj = p.encode_image("mug.png")                      # codes of the object in the photo (segment="auto")
+    p.fit(obj, InversionConfig())                        # optional: fit the codes to the photo (a few seconds)
     view = p.render(obj, intrinsics, c2w)                # RGB, depth, affordance at any camera
     mesh = p.mesh(obj, resolution=128)                   # LabelledMesh with per-vertex affordance
 """
@@ -18,13 +19,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.data.cameras import Intrinsics, look_at
+from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics, look_at
 from affnerf.errors import input_error
 from affnerf.meshio import LabelledMesh
 from affnerf.model.affnerf import Codes
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import RenderedView, render_view
 from affnerf.predict.image import PreparedImage, prepare_image
+from affnerf.predict.invert import InversionConfig, InversionResult, crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_surface
 from affnerf.predict.segment import SegmentMethod
@@ -33,11 +35,13 @@ from affnerf.rendering.grid import OccupancyGrid
 
 @dataclass
 class EncodedObject:
-    """An object seen in one image: its codes, how its image was prepared, and (once built) its occupancy grid."""
+    """An object seen in one image: its codes, how its image was prepared, (once built) its occupancy grid, and
+    (once fitted to its image) how the fit went."""
 
     codes: Codes
     prepared: PreparedImage | None = None
     grid: OccupancyGrid | None = None
+    inversion: InversionResult | None = None
 
 
 def turntable_poses(count: int, elevation_deg: float = 25.0, radius: float = 0.75) -> np.ndarray:
@@ -125,6 +129,29 @@ class Predictor:
         size = self.loaded.model.config.encoder_resolution
         prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
+
+    def fit(
+        self, obj: EncodedObject, config: InversionConfig, camera_angle_x: float = DEFAULT_CAMERA_ANGLE_X
+    ) -> InversionResult:
+        """Fit the object's codes to its photo (test-time inversion, :mod:`affnerf.predict.invert`): the photo's
+        camera is searched and the codes are moved to render the photo's crop. Replaces ``obj.codes`` and its
+        grid; the result is also kept in ``obj.inversion``.
+
+        Args:
+            obj: an object encoded by :meth:`encode_image`.
+            config: the fit's settings.
+            camera_angle_x: the photo's horizontal field of view, radians.
+        """
+        if obj.prepared is None:
+            raise ValueError("fit needs an object encoded from a photo (encode_image)")
+        mask = obj.prepared.mask
+        intr = Intrinsics.from_fov(mask.shape[1], mask.shape[0], camera_angle_x)
+        k = np.array([intr.fl_x, intr.fl_y, intr.cx, intr.cy])
+        size = self.loaded.model.config.encoder_resolution
+        target = crop_target(obj.prepared.rgb, mask, k, size, self.loaded.background)
+        result = invert(self.loaded.model, obj.codes, target, np.asarray(self.loaded.background), config)
+        obj.codes, obj.grid, obj.inversion = result.codes, None, result
+        return result
 
     def render(self, obj: EncodedObject, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
         """Render the object from a camera in its canonical frame."""
