@@ -50,6 +50,8 @@ from affnerf.metrics.segmentation import confusion_matrix, mean_iou, object_only
 from affnerf.objects.asset import merge_parts
 from affnerf.pictures.compose import fit_height, legend, overlay_affordance, stack_rows, text_strip
 from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
+from affnerf.predict.invert import InversionConfig
+from affnerf.predict.outputs import PredictConfig
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
@@ -119,10 +121,13 @@ def miou_2d(truth: np.ndarray, pred: np.ndarray, classes: int) -> tuple[float, f
 
 
 def predict_view(
-    predictor: Predictor, image: Path, novel: np.ndarray
+    predictor: Predictor, image: Path, novel: np.ndarray, fit_steps: int
 ) -> tuple[np.ndarray, np.ndarray, LabelledMesh, str]:
-    """From one photo: the novel view's RGB (uint8) and labels, the labelled mesh, and how the object was separated."""
+    """From one photo: the novel view's RGB (uint8) and labels, the labelled mesh, and how the object was separated
+    (with ``fit_steps`` of test-time inversion first, as ``affnerf predict``; 0 = the encoder's codes)."""
     obj = predictor.encode_image(image, segment="auto")
+    if fit_steps > 0:
+        predictor.fit(obj, InversionConfig(steps=fit_steps), FOV_X)
     intr = Intrinsics.from_fov(NOVEL_WIDTH, NOVEL_HEIGHT, FOV_X)
     view = predictor.render(obj, intr, novel)
     mesh = predictor.mesh(obj, MESH_RESOLUTION)
@@ -161,7 +166,13 @@ def spread(values: list[float | None]) -> dict[str, float | None]:
 
 
 def run_object(
-    name: str, info: dict, predictor: Predictor, work: Path, out: Path, azimuths: tuple[int, ...] = INPUT_AZIMUTHS
+    name: str,
+    info: dict,
+    predictor: Predictor,
+    work: Path,
+    out: Path,
+    azimuths: tuple[int, ...] = INPUT_AZIMUTHS,
+    fit_steps: int = PredictConfig.fit_steps,
 ) -> dict:
     classes = predictor.classes
     caster = FrameCaster(info["surface"])
@@ -185,7 +196,7 @@ def run_object(
         image = work / "inputs" / f"{name}_az{az:03d}.png"
         image.parent.mkdir(parents=True, exist_ok=True)
         Image.fromarray(frame.rgb).save(image)
-        rgb, labels, mesh, separated_by = predict_view(predictor, image, novel_pose)
+        rgb, labels, mesh, separated_by = predict_view(predictor, image, novel_pose, fit_steps)
         score = score_mesh(mesh, truth_samples, sample_seed(SEED, info["id"]))
         m2d, m2d_obj = miou_2d(true_novel.affordance, labels, len(classes))
         present |= set(np.unique(labels).tolist()) | set(np.unique(mesh.face_props["affordance"]).tolist())
@@ -244,6 +255,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results")
     parser.add_argument("--objects", nargs="*", default=list(OBJECTS))
     parser.add_argument("--azimuths", nargs="*", type=int, default=list(INPUT_AZIMUTHS), help="for quick checks")
+    parser.add_argument("--fit-steps", type=int, default=PredictConfig.fit_steps, help="0: the encoder's codes")
     args = parser.parse_args()
     started = time.perf_counter()
     args.work.mkdir(parents=True, exist_ok=True)
@@ -255,7 +267,7 @@ def main() -> None:
     if list(predictor.classes) != list(AFFORDANCE_CLASSES):
         raise SystemExit(f"{args.checkpoint}: its classes differ from the dataset's")
     objects = {
-        name: run_object(name, infos[name], predictor, args.work, args.out, tuple(args.azimuths))
+        name: run_object(name, infos[name], predictor, args.work, args.out, tuple(args.azimuths), args.fit_steps)
         for name in args.objects
     }
     checkpoint = Path(predictor.loaded.path).resolve()
@@ -268,6 +280,7 @@ def main() -> None:
         "checkpoint": {"path": shown, "step": predictor.loaded.step, "sha256": sha256(checkpoint)},
         "settings": {
             "input_azimuths_deg": list(args.azimuths),
+            "fit_steps": args.fit_steps,
             "input_elevation_deg": INPUT_ELEVATION,
             "input_radius_m": INPUT_RADIUS,
             "input_size": [WIDTH, HEIGHT],

@@ -147,3 +147,13 @@ def test_retrieval_bank_holds_only_the_categories_the_run_trained_on(trained_run
     monkeypatch.setattr(conditioned_methods, "load_model", trained_on_bottles)
     bottles = build_method("retrieval", config, ds)
     assert {e.category for e in bottles.entries} == {"bottle"}
+
+
+def test_affnerf_fit_scores_the_fitted_codes(trained_runs, train_dataset, tmp_path):
+    out = tmp_path / "eval"
+    assert _eval(trained_runs["affnerf"], train_dataset, out, "affnerf,affnerf-fit", "--no-fast") == 0
+    plain, fitted = (json.loads((out / f"metrics_{m}.json").read_text()) for m in ("affnerf", "affnerf-fit"))
+    assert fitted["method"] == "affnerf-fit" and fitted["mean"]["objects"] == plain["mean"]["objects"] == 2
+    assert 0.0 <= fitted["mean"]["mIoU"] <= 1.0 and fitted["mean"]["fscore_1cm"] is not None
+    assert fitted["mean"]["PSNR"] != plain["mean"]["PSNR"]  # the fit changed what is rendered
+    assert "| affnerf-fit |" in (out / "table2.md").read_text()

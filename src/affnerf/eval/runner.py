@@ -36,9 +36,9 @@ class EvalConfig:
         out: output folder.
         split: ``test`` (held-out instances), ``unseen`` (held-out categories), ``val``, or ``all`` (every object,
             e.g. of a category a leave-one-category-out run never saw).
-        method: one or more registered methods, comma-separated (built in: affnerf, pixelnerf, semantic-ray,
-            gsnerf, semantic-nerf, retrieval, constant; ``all`` = every method but constant); see
-            :mod:`affnerf.eval.registry`.
+        method: one or more registered methods, comma-separated (built in: affnerf, affnerf-fit (AFF-NeRF with
+            test-time inversion), pixelnerf, semantic-ray, gsnerf, semantic-nerf, retrieval, constant; ``all`` =
+            every method but affnerf-fit and constant); see :mod:`affnerf.eval.registry`.
         input_views: views each method is given (1: single image; PixelNeRF-M, Semantic-Ray and GSNeRF are also
             run with 3 posed views, Semantic-NeRF with 20 as a many-view reference).
         target_views: views scored per object (K = 20 in conventions §5).
