@@ -40,7 +40,8 @@ def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
 def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
     """Grasps like the paper's Table 3, as a 2×2 (conventions §6).
 
-    For each test object: plan grasps on {its true mesh, the affordance model predicted from one image} ×
+    For each test object: plan grasps on {its true mesh, the affordance model predicted from one image (fitted to
+    that image by --fit-steps of test-time inversion, as affnerf predict does; 0 = the encoder's codes)} ×
     {the whole surface, the task's affordance only (grasp; cabinet: pull)}; score every grasp on the true mesh at
     the object's metric size (canonical / scale, or --object-size): mean Ferrari-Canny epsilon and its ratio to
     the whole surface of the same mesh, the share of grasps with both contacts on the true task part, the lift

@@ -31,6 +31,7 @@ from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
+from affnerf.predict.invert import InversionConfig, dataset_crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_mesh
 from affnerf.predict.predictor import pick_device
@@ -65,6 +66,8 @@ class GraspEvalConfig:
         pictures: write OUT/grasps_<category>.png: the first object's four planning meshes with their best grasps.
         part_margin: in the task-part conditions, contacts keep this distance (metres, at metric size) from the
             surface of other labels (:class:`~affnerf.grasp.planner.PlanConfig`).
+        fit_steps: steps of test-time inversion of the predicted models to their input view (as ``affnerf
+            predict``; :mod:`affnerf.predict.invert`); 0 = the encoder's codes.
     """
 
     run: Path
@@ -85,15 +88,26 @@ class GraspEvalConfig:
     object_size: float | None = None
     pictures: bool = True
     part_margin: float = PART_MARGIN
+    fit_steps: int = 30
 
 
 def predicted_object(
-    loaded: LoadedModel, obj: ObjectData, view: int, resolution: int, level: float | None = None
+    loaded: LoadedModel,
+    obj: ObjectData,
+    view: int,
+    resolution: int,
+    level: float | None = None,
+    fit_steps: int = 0,
 ) -> GraspObject:
-    """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh."""
+    """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh (with
+    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none)."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
     encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
+    if fit_steps > 0:
+        target = dataset_crop_target(obj, view, model.config.encoder_resolution)
+        config = InversionConfig(steps=fit_steps, seed=view)
+        encoding = invert(model, encoding, target, np.asarray(loaded.background), config).codes
     mesh = model_mesh(model, encoding, resolution, level, model.occupancy(encoding))
     return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
 
@@ -174,7 +188,9 @@ def evaluate_object(
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
-    predicted = scaled(predicted_object(loaded, obj, view, config.resolution, config.level), size.factor)
+    predicted = scaled(
+        predicted_object(loaded, obj, view, config.resolution, config.level, config.fit_steps), size.factor
+    )
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(num=config.num, seed=config.seed, part_margin=config.part_margin)
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))

@@ -30,6 +30,7 @@ import torch
 import torch.nn.functional as F
 
 from affnerf.data.crop import crop_intrinsics, crop_object, crop_window, resample_to_crop
+from affnerf.data.dataset import ObjectData
 from affnerf.model.affnerf import Codes
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.raymarch import RayOutputs
@@ -115,6 +116,13 @@ def crop_target(
     crop = crop_object(rgb, mask, size, background).astype(np.float32) / 255.0
     crop_mask = resample_to_crop(mask.astype(np.float32), k, crop_k, size)
     return CropTarget(crop, crop_mask, crop_k)
+
+
+def dataset_crop_target(obj: ObjectData, view: int, size: int) -> CropTarget:
+    """The encoder crop of one dataset view, with its object mask and its intrinsics (never its pose)."""
+    k = obj.record.intrinsics
+    mask = obj.affordance(view) > 0
+    return crop_target(obj.rgb(view), mask, np.array([k.fl_x, k.fl_y, k.cx, k.cy]), size, obj.record.background_color)
 
 
 @dataclass(frozen=True)

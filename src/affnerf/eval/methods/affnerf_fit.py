@@ -13,14 +13,7 @@ from affnerf.data.dataset import ObjectData
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod, load_run
 from affnerf.eval.registry import MethodContext, MethodSpec, register_method
 from affnerf.model.affnerf import Codes
-from affnerf.predict.invert import CropTarget, InversionConfig, InversionResult, crop_target, invert
-
-
-def dataset_crop_target(obj: ObjectData, view: int, size: int) -> CropTarget:
-    """The encoder crop of one dataset view with its object mask and intrinsics (side ``size``)."""
-    k = obj.record.intrinsics
-    mask = obj.affordance(view) > 0
-    return crop_target(obj.rgb(view), mask, np.array([k.fl_x, k.fl_y, k.cx, k.cy]), size, obj.record.background_color)
+from affnerf.predict.invert import InversionConfig, InversionResult, dataset_crop_target, invert
 
 
 class FittedAffNeRFMethod(ConditionedNeRFMethod):
