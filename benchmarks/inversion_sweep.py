@@ -47,6 +47,7 @@ VARIANTS: list[tuple[str, dict | None]] = [
     ("default, affordance weight 10, prior 2", {"affordance_weight": 10.0, "prior": 2.0}),
     ("default, camera kept where the search put it", {"fit_camera": False}),
     ("default, fitted at 48x48 with 1,024 rays a step", {"resolution": 48, "rays": 1024}),
+    ("default, fits from the 2 best cameras, the better kept", {"hypotheses": 2}),
 ]
 KEYS = ("mIoU", "PA", "MPA", "mIoU_object", "PSNR", "fscore_1cm", "affordance_miou_3d")
 

@@ -155,3 +155,15 @@ def test_the_shipped_model_fits_a_photo_and_finds_its_camera(tmp_path, tiny_conf
     eye = obj.pose(0)[:3, 3]
     azimuth = math.atan2(eye[1], eye[0])
     assert abs((result.camera[0] - azimuth + math.pi) % (2 * math.pi) - math.pi) < math.radians(30)
+
+
+def test_more_hypotheses_never_fit_worse_and_frozen_weights_stay_frozen():
+    model, truth, target, _ = _model_and_target()
+    frozen = next(model.parameters())
+    frozen.requires_grad_(False)
+    start = Codes(truth.shape + 0.5, truth.appearance - 0.5)
+    grid = dict(resolution=16, azimuths=6, elevations_deg=(30.0, 60.0), distances=(0.6,), steps=5, rays=0)
+    one = invert(model, start, target, np.ones(3), InversionConfig(**grid))
+    two = invert(model, start, target, np.ones(3), InversionConfig(**grid, hypotheses=2))
+    assert two.loss_end <= one.loss_end
+    assert not frozen.requires_grad and all(p.requires_grad for p in list(model.parameters())[1:])

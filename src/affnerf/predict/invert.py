@@ -4,7 +4,7 @@ The encoders give the codes in one forward pass; they are a guess, and nothing c
 looks like the photo. CodeNeRF (Jang and Agapito, 2021) and DeepSDF's auto-decoder close that gap at test time by
 optimising the latent codes (and the unknown camera) so that the decoder renders the observed image. Here:
 
-1. **Camera search** (:func:`search_camera`): the input camera is unknown (AFF-NeRF takes unposed photos), but
+1. **Camera search** (:func:`search_cameras`): the input camera is unknown (AFF-NeRF takes unposed photos), but
    dataset and photo cameras look at the canonical origin from the upper hemisphere (conventions §1). Every camera
    of a grid over azimuth, elevation and distance is scored by how well the encoded object's silhouette, projected
    through the crop's intrinsics, overlaps the object's mask in the crop (IoU). The best few are then rendered and
@@ -63,6 +63,8 @@ class InversionConfig:
         distances: camera distances of the camera search, metres.
         search_resolution: density samples per axis of the silhouette used by the search.
         finalists: best cameras by silhouette that are rendered to choose by colour.
+        hypotheses: fits run from the best cameras, each from the encoder's codes; the one with the lowest final
+            loss is kept (1: the best camera only).
         seed: random source of the rays' draw.
     """
 
@@ -80,6 +82,7 @@ class InversionConfig:
     distances: tuple[float, ...] = (0.5, 0.6, 0.7, 0.8, 0.9)
     search_resolution: int = 40
     finalists: int = 12
+    hypotheses: int = 1
     seed: int = 0
 
 
@@ -227,26 +230,27 @@ def _target_tensors(
     return _pixels(size).to(device), rgb.to(device), mask.to(device), k.to(device)
 
 
-def search_camera(
+def search_cameras(
     model: ConditionedNeRF,
     codes: Codes,
     points: np.ndarray,
     target: CropTarget,
     background: np.ndarray,
     config: InversionConfig,
-) -> tuple[np.ndarray, float]:
-    """The camera of the input view: the best by silhouette IoU of ``points`` (P, 3), the encoded object's
-    occupied cells (:func:`object_points`), then by photometric loss among the ``finalists`` best.
+) -> list[tuple[np.ndarray, float]]:
+    """Candidate cameras of the input view: the ``finalists`` best by silhouette IoU of ``points`` (P, 3), the
+    encoded object's occupied cells (:func:`object_points`), re-ranked by photometric loss.
 
     Returns:
-        (3,) azimuth, elevation, distance, and the chosen camera's silhouette IoU.
+        (camera, silhouette IoU) pairs, the lowest photometric loss first; a camera is (3,) azimuth, elevation,
+        distance. One pair (the grid's first camera, IoU 0) when the object has no occupied cell.
     """
     size = config.resolution
     cameras = camera_grid(config.azimuths, config.elevations_deg, config.distances)
     device = next(model.parameters()).device
     pixels, rgb, mask, k = _target_tensors(target, size, device)
     if len(points) == 0:
-        return cameras[0], 0.0
+        return [(cameras[0], 0.0)]
     covered = mask.cpu().numpy().reshape(size, size) > SEARCH_COVERAGE
     iou = silhouette_iou(project_silhouettes(points, cameras, k.cpu().numpy(), size), covered)
     best = np.argsort(-iou, kind="stable")[: max(1, config.finalists)]
@@ -256,8 +260,7 @@ def search_camera(
         for i in best:
             stages = render_crop(model, codes, torch.from_numpy(cameras[i]).to(device), pixels, k, bg)
             losses.append(float(crop_loss(stages, rgb, mask, 1.0)))
-    chosen = int(best[int(np.argmin(losses))])
-    return cameras[chosen], float(iou[chosen])
+    return [(cameras[best[j]], float(iou[best[j]])) for j in np.argsort(losses, kind="stable")]
 
 
 def point_labels(model: ConditionedNeRF, codes: Codes, points: torch.Tensor) -> torch.Tensor:
@@ -334,18 +337,24 @@ def fit_codes(
 def invert(
     model: ConditionedNeRF, codes: Codes, target: CropTarget, background: np.ndarray, config: InversionConfig
 ) -> InversionResult:
-    """Search the input camera, then fit the codes to the crop (see the module docstring)."""
+    """Search the input camera, then fit the codes to the crop (see the module docstring); with
+    ``config.hypotheses`` > 1, fit from that many of the best cameras and keep the fit with the lowest loss."""
+    trainable = [p.requires_grad for p in model.parameters()]
     for p in model.parameters():
         p.requires_grad_(False)
     try:
         points = object_points(model, codes, config.search_resolution, model.config.occupancy_density)
-        camera, iou = search_camera(model, codes, points, target, background, config)
+        candidates = search_cameras(model, codes, points, target, background, config)
         if config.steps <= 0:
+            camera, iou = candidates[0]
             return InversionResult(codes, tuple(float(c) for c in camera), iou, math.nan, math.nan)
         rng = np.random.default_rng(config.seed)
         anchors = points[rng.permutation(len(points))[: config.anchor_points]] if config.anchor_points else None
-        fitted, camera, before, after = fit_codes(model, codes, target, camera, background, config, anchors)
+        results = []
+        for camera, iou in candidates[: max(1, config.hypotheses)]:
+            fitted, camera, before, after = fit_codes(model, codes, target, camera, background, config, anchors)
+            results.append(InversionResult(fitted, tuple(float(c) for c in camera), iou, before, after))
     finally:
-        for p in model.parameters():
-            p.requires_grad_(True)
-    return InversionResult(fitted, tuple(float(c) for c in camera), iou, before, after)
+        for p, flag in zip(model.parameters(), trainable, strict=True):
+            p.requires_grad_(flag)
+    return min(results, key=lambda r: r.loss_end)
