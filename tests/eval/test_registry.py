@@ -18,14 +18,15 @@ def test_builtin_methods_are_registered_in_order():
         "pose-aware",
         "semantic-ray",
         "gsnerf",
+        "affnerf-fit",
         "semantic-nerf",
         "retrieval",
         "constant",
     ]
-    assert method_names()[:8] == expected
+    assert method_names()[:9] == expected
 
 
-def test_all_leaves_out_the_constant_floor():
+def test_all_leaves_out_the_constant_floor_and_the_fitted_affnerf():
     everything = ["affnerf", "pixelnerf", "pose-aware", "semantic-ray", "gsnerf", "semantic-nerf", "retrieval"]
     assert parse_methods("all") == everything
     assert parse_methods("semantic-ray,gsnerf") == ["semantic-ray", "gsnerf"]
