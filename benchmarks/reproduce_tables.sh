@@ -76,6 +76,9 @@ done
 # 4. Table 2 on held-out instances (test split, 5 objects per category), 1 input view, 20 target views at half resolution
 E="$W/eval-test"
 $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf,retrieval,constant --out "$E" $EVAL
+# the same model with test-time inversion (what `affnerf predict` does), and the inversion settings on validation
+$A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf-fit --out "$E" $EVAL
+.venv/bin/python benchmarks/inversion_sweep.py --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$R"
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --out "$E" $EVAL
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --input-views 3 --out "$E" $EVAL
 
@@ -93,7 +96,7 @@ $A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test
 # 4c. the per-object mesh level against one level for all (same grids), and view stability (4 input views per object)
 .venv/bin/python benchmarks/mesh_level.py --checkpoint src/affnerf/weights/affnerf-small.pt --data "$W/data" \
     --out "$R/mesh_level"
-$A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method affnerf,retrieval \
+$A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method affnerf,affnerf-fit,retrieval \
     --target-views 10 --scale 0.25 --max-objects 1 --mesh-resolution 96 --stability-views 4 --device "$DEVICE" \
     --out "$W/eval-stability"
 
@@ -128,7 +131,8 @@ for held in teapot scissors; do
 done
 
 # 7. Table 3 as a 2x2 (true or predicted mesh x whole surface or task part), 5 test objects of each of the 8 categories,
-#    with the shipped model and the planner's default 1 cm part margin (chosen on validation objects by
+#    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
+#    default 1 cm part margin (chosen on validation objects by
 #    benchmarks/grasp_margin.py); about 10 minutes on one core (committed run: the two halves of the categories side
 #    by side, 5 min 49 s, merged; every object is evaluated on its own, so it equals this one command)
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
