@@ -134,7 +134,7 @@ done
 #    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
 #    default 1 cm part margin (chosen on validation objects by
 #    benchmarks/grasp_margin.py); about 10 minutes on one core (committed run: the two halves of the categories side
-#    by side, 5 min 49 s, merged; every object is evaluated on its own, so it equals this one command)
+#    by side, 6 min 36 s, merged; every object is evaluated on its own, so it equals this one command)
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
 # 8. collect
