@@ -55,8 +55,6 @@ class InversionConfig:
             render at the same pixels (the fit may move the surface and change colours, not relabel parts).
         anchor_points: points of the encoded object (occupied cells of the camera search) whose affordance the fit
             keeps, with the same weight (0: none).
-        balanced_anchors: draw the anchor points evenly over the labels the encoder's codes give them instead of
-            uniformly over the object.
         resolution: side of the crop rendering that is fitted, pixels.
         rays: rays per step, drawn at random from the crop's pixels (0: all of them).
         fit_camera: also optimise the camera's azimuth, elevation and distance.
@@ -76,7 +74,6 @@ class InversionConfig:
     mask_weight: float = 1.0
     affordance_weight: float = 3.0
     anchor_points: int = 2048
-    balanced_anchors: bool = False
     resolution: int = 32
     rays: int = 512
     fit_camera: bool = True
@@ -272,24 +269,6 @@ def point_labels(model: ConditionedNeRF, codes: Codes, points: torch.Tensor) -> 
     return model.point_geometry(codes, obj, points)[-1][1]
 
 
-@torch.no_grad()
-def choose_anchors(model: ConditionedNeRF, codes: Codes, points: np.ndarray, config: InversionConfig) -> np.ndarray:
-    """(A, 3) points whose labels the fit keeps: ``anchor_points`` of the (P, 3) occupied cells, drawn at random,
-    or with ``balanced_anchors`` as evenly as possible over the labels the encoder's codes give them (so a thin
-    part with few cells is held as firmly as a body)."""
-    rng = np.random.default_rng(config.seed)
-    if not config.balanced_anchors or len(points) <= config.anchor_points:
-        return points[rng.permutation(len(points))[: config.anchor_points]]
-    device = next(model.parameters()).device
-    labels = point_labels(model, codes, torch.from_numpy(points).float().to(device)).argmax(-1).cpu().numpy()
-    groups = [rng.permutation(np.flatnonzero(labels == c)) for c in np.unique(labels)]
-    share = config.anchor_points // len(groups)
-    taken = np.concatenate([g[:share] for g in groups])
-    rest = np.setdiff1d(np.arange(len(points)), taken)
-    extra = rng.permutation(rest)[: config.anchor_points - len(taken)]
-    return points[np.concatenate([taken, extra])]
-
-
 def draw_rays(n: int, count: int, generator: torch.Generator) -> torch.Tensor:
     """(min(n, count),) distinct ray indices drawn at random from n (all n, in order, when ``count`` is 0 or at least
     n)."""
@@ -369,7 +348,8 @@ def invert(
         if config.steps <= 0:
             camera, iou = candidates[0]
             return InversionResult(codes, tuple(float(c) for c in camera), iou, math.nan, math.nan)
-        anchors = choose_anchors(model, codes, points, config) if config.anchor_points else None
+        rng = np.random.default_rng(config.seed)
+        anchors = points[rng.permutation(len(points))[: config.anchor_points]] if config.anchor_points else None
         results = []
         for camera, iou in candidates[: max(1, config.hypotheses)]:
             fitted, camera, before, after = fit_codes(model, codes, target, camera, background, config, anchors)
