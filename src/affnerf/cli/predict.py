@@ -44,5 +44,5 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
         Predictor.load(run, config.device, config.chunk, fast=config.fast, grid_threshold=config.grid_threshold),
         replace(config, run=run),
     )
-    print(json.dumps({k: summary[k] for k in ("classes_present", "surface_area_m2")}, indent=1))
+    print(json.dumps({k: summary[k] for k in ("classes_present", "surface_area_m2", "fit")}, indent=1))
     print(f"-> {config.out}")
