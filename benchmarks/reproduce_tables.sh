@@ -107,10 +107,11 @@ $A eval --run "$W/affnerf" --data "$W/data" --split test --max-objects 1 --metho
 $A eval --run "$W/affnerf" --data "$W/data" --split test --max-objects 1 --method semantic-nerf --input-views 20 \
     --semantic-steps 200 --out "$S" $EVAL
 
-# 6. unseen categories: the first 10 instances of the category each leave-one-out run never saw (meshes at 50 /m)
-#    (the committed table2_unseen_*.md came from an earlier run of the same AFF-NeRF command with --time-limit 13)
+# 6. unseen categories: the first 10 instances of the category each leave-one-out run never saw (meshes at 50 /m),
+#    with and without the fit to the input view
 for held in teapot scissors; do
-    $A eval --run "$W/loco-$held" --data "$W/data" --split all --categories "$held" --method affnerf,retrieval,constant \
+    $A eval --run "$W/loco-$held" --data "$W/data" --split all --categories "$held" \
+        --method affnerf,affnerf-fit,retrieval,constant \
         --out "$W/eval-unseen-$held" --scale 0.5 --target-views 20 --max-objects 10 --device "$DEVICE"
 done
 
@@ -149,6 +150,7 @@ for m in "$S"/metrics_*.json; do cp "$m" "$R/table2_semantic_$(basename "$m")"; 
 for held in teapot scissors; do
     cp "$W/eval-unseen-$held/table2.md" "$R/table2_unseen_$held.md"
     cp "$W/eval-unseen-$held/metrics.json" "$R/metrics_unseen_$held.json"
+    for m in affnerf-fit retrieval; do cp "$W/eval-unseen-$held/metrics_$m.json" "$R/metrics_unseen_${held}_$m.json"; done
 done
 cp "$B/table2.md" "$R/table2_baselines.md"; cp "$B/figure.png" "$R/table2_baselines_figure.png"
 for m in "$B"/metrics_*.json; do cp "$m" "$R/table2_baselines_$(basename "$m")"; done
