@@ -63,7 +63,12 @@ def test_predict_writes_every_output(trained_runs, photo, tmp_path, capsys, kind
     assert set(summary["surface_area_m2"]) == set(summary["classes_present"]) and summary["classes_present"]
     assert (out / "affordance_model.glb").stat().st_size > 0
     fit = summary["fit"]  # test-time inversion is on by default
-    assert fit["steps"] == 30 and set(fit["camera"]) == {"azimuth_deg", "elevation_deg", "distance_m"}
+    assert fit["steps"] == 30
+    assert set(fit["camera"]) == {"azimuth_deg", "elevation_deg", "distance_m", "c2w", "crop_fov_deg"}
+    c2w, camera = np.asarray(fit["camera"]["c2w"]), fit["camera"]
+    assert np.isclose(np.linalg.norm(c2w[:3, 3]), camera["distance_m"], atol=1e-4)  # at that distance,
+    assert np.dot(c2w[:3, 2], c2w[:3, 3]) > 0.99 * camera["distance_m"]  # looking at the origin
+    assert 0.0 < camera["crop_fov_deg"] < 60.0
     assert 0.0 <= fit["silhouette_iou"] <= 1.0 and fit["loss_after"] >= 0.0
 
 

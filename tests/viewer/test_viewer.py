@@ -230,3 +230,19 @@ def test_metric_grasps_are_drawn_on_the_canonical_mesh(tmp_path):
     assert np.allclose(b.pose[:3, 3], 2 * a.pose[:3, 3]) and np.allclose(b.pose[:3, :3], a.pose[:3, :3])
     assert np.allclose(b.mesh.extents, 2 * a.mesh.extents)
     assert b.width == a.width == 0.04  # the opening is reported in metres
+
+
+def test_a_fitted_prediction_shows_its_input_at_the_camera_the_fit_found(tmp_path: Path) -> None:
+    from affnerf.data.cameras import look_at
+    from affnerf.viewer.sources import find_camera
+
+    folder = write_prediction_folder(tmp_path / "pred")
+    c2w = look_at(np.array([0.3, 0.4, 0.5]), np.zeros(3))
+    summary = {"fit": {"camera": {"c2w": c2w.tolist(), "crop_fov_deg": 20.0}}}
+    (folder / "prediction.json").write_text(json.dumps(summary))
+    camera = find_camera(folder)
+    assert camera is not None and not camera.exact and "fit" in camera.note
+    np.testing.assert_allclose(camera.c2w, c2w)
+    assert math.isclose(camera.fov_y, math.radians(20.0)) and camera.aspect == 1.0
+    (folder / "prediction.json").write_text(json.dumps({"fit": None}))  # --fit-steps 0: the stand-in again
+    assert "pose-free" in find_camera(folder).note

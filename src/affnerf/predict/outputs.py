@@ -23,9 +23,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
 from PIL import Image
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
+from affnerf.data.crop import crop_window
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.pictures.compose import overlay_affordance
@@ -34,6 +36,7 @@ from affnerf.predict.invert import InversionConfig, InversionResult
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import Predictor, turntable_poses
 from affnerf.predict.segment import SegmentMethod
+from affnerf.predict.viewpoint import camera_pose
 
 logger = logging.getLogger(__name__)
 
@@ -91,20 +94,38 @@ class PredictConfig:
     fov: float = 60.0
 
 
-def fit_record(result: InversionResult, steps: int) -> dict[str, Any]:
-    """The ``fit`` entry of ``prediction.json``: the photo's camera in the canonical frame and the fit's losses."""
+def fit_record(result: InversionResult, steps: int, crop_fov_deg: float) -> dict[str, Any]:
+    """The ``fit`` entry of ``prediction.json``: the photo's camera in the canonical frame (its angles and distance,
+    and as a camera-to-canonical pose), the field of view of the crop the encoders saw, and the fit's losses."""
     az, el, dist = result.camera
+    pose = camera_pose(*(torch.tensor(float(v), dtype=torch.float64) for v in result.camera)).numpy()
     return {
         "steps": steps,
         "camera": {
             "azimuth_deg": round(math.degrees(az), 2),
             "elevation_deg": round(math.degrees(el), 2),
             "distance_m": round(dist, 4),
+            "c2w": np.round(pose, 6).tolist(),
+            "crop_fov_deg": round(crop_fov_deg, 3),
         },  # fmt: skip
         "silhouette_iou": round(result.search_iou, 4),
         "loss_before": round(result.loss_start, 5),
         "loss_after": round(result.loss_end, 5),
     }
+
+
+def crop_fov(mask: np.ndarray, fov_deg: float) -> float:
+    """Horizontal (= vertical) field of view, degrees, of the square crop cut around ``mask`` (H, W) from a photo
+    of horizontal field of view ``fov_deg``.
+
+    Example:
+        >>> m = np.zeros((300, 400), bool); m[100:200, 150:250] = True
+        >>> round(crop_fov(m, 60.0), 2)
+        19.01
+    """
+    side = crop_window(mask)[2]
+    focal = 0.5 * mask.shape[1] / math.tan(math.radians(fov_deg) / 2.0)
+    return math.degrees(2.0 * math.atan(0.5 * side / focal))
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
@@ -189,7 +210,9 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
             **mesh_record(mesh, config.resolution, level),
-            "fit": fit_record(obj.inversion, config.fit_steps) if obj.inversion is not None else None,
+            "fit": None
+            if obj.inversion is None
+            else fit_record(obj.inversion, config.fit_steps, crop_fov(obj.prepared.mask, config.fov)),  # fmt: skip
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")

@@ -142,10 +142,31 @@ def dataset_camera(transforms: Path) -> InputCamera:
     return InputCamera(c2w, 2.0 * math.atan(h / (2.0 * fl_y)), w / h, image if image.is_file() else None, True, note)
 
 
+def fitted_camera(image: Path) -> InputCamera | None:
+    """The camera the fit found for a prediction's ``input.png`` (``fit.camera`` of the ``prediction.json`` beside
+    it: its camera-to-canonical pose and the crop's field of view), or None when there is none (``--fit-steps 0``,
+    an older prediction, an unreadable file)."""
+    try:
+        camera = json.loads((image.parent / "prediction.json").read_text())["fit"]["camera"]
+        c2w, fov = np.asarray(camera["c2w"], np.float64), math.radians(float(camera["crop_fov_deg"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if c2w.shape != (4, 4) or not np.isfinite(c2w).all() or not 0.0 < fov < math.pi:
+        return None
+    note = (
+        "The camera the fit to the photo found (prediction.json: fit.camera), drawn with the crop the encoders saw "
+        "on its axis (the crop's own offset from the photo's centre is not shown)."
+    )
+    return InputCamera(c2w, fov, 1.0, image, False, note)
+
+
 def prediction_camera(image: Path) -> InputCamera:
-    """A stand-in camera for a prediction's ``input.png``: the first turntable camera (from -y, 25 degrees up,
-    0.75 m away) with the training cameras' 60 degree horizontal field of view. The model is pose-free, so the
-    real input camera is not known."""
+    """The camera of a prediction's ``input.png``: the one the fit found (:func:`fitted_camera`), else a stand-in,
+    the first turntable camera (from -y, 25 degrees up, 0.75 m away) with the training cameras' 60 degree
+    horizontal field of view."""
+    fitted = fitted_camera(image)
+    if fitted is not None:
+        return fitted
     from PIL import Image
 
     from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X
