@@ -83,6 +83,11 @@ def test_fit_steps_zero_keeps_the_encoders_codes(trained_runs, photo, tmp_path):
     assert plain["fit"] is None and fitted["fit"]["steps"] == 5
     frames = [np.asarray(Image.open(tmp_path / name / "turntable/000.png")) for name in ("plain", "fit")]
     assert not np.array_equal(frames[0], frames[1])  # the fitted codes render another object
+    check = np.asarray(Image.open(tmp_path / "fit" / "fit.png"))  # crop | render at the camera found | labels
+    assert check.shape == (128, 3 * 128, 3) and "fit.png" in fitted["files"]
+    assert "fit.png" not in plain["files"] and not (tmp_path / "plain" / "fit.png").exists()
+    assert main([*common, "--out", str(tmp_path / "fit"), "--fit-steps", "0"]) == 0  # the stale check goes
+    assert not (tmp_path / "fit" / "fit.png").exists()
 
 
 def test_blank_and_missing_images_are_one_line_errors_and_keep_earlier_outputs(trained_runs, photo, tmp_path, capsys):
@@ -195,7 +200,7 @@ def test_a_model_without_surface_writes_no_mesh_says_so_and_keeps_the_other_outp
     assert summary["mesh"] is None and summary["mesh_note"].startswith("the model predicts no surface")
     assert summary["classes_present"] == [] and summary["surface_area_m2"] == {}
     assert not (out / "affordance_model.ply").exists() and not (out / "affordance_model.glb").exists()  # none stale
-    assert set(summary["files"]) == {"input.png", "mask.png", "turntable/000.png", "turntable/001.png",
+    assert set(summary["files"]) == {"input.png", "mask.png", "fit.png", "turntable/000.png", "turntable/001.png",
                                      "turntable.gif", "prediction.json"}  # fmt: skip
     for name in summary["files"]:
         assert (out / name).is_file(), name

@@ -19,8 +19,8 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     affnerf[segment]), cropped, centred and resized the way training saw objects, and encoded. Unless --fit-steps
     is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is searched,
     assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on a CPU).
-    Writes OUT/input.png,
-    OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/turntable/*.png and
+    Writes OUT/input.png, OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/fit.png (after a
+    fit: the crop | the fitted model at the camera found | its affordance), OUT/turntable/*.png and
     OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply (vertex colours and an integer vertex
     property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped
     with affnerf is used.
@@ -44,5 +44,8 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
         Predictor.load(run, config.device, config.chunk, fast=config.fast, grid_threshold=config.grid_threshold),
         replace(config, run=run),
     )
-    print(json.dumps({k: summary[k] for k in ("classes_present", "surface_area_m2", "fit")}, indent=1))
+    shown = {k: summary[k] for k in ("classes_present", "surface_area_m2")}
+    if summary["fit"] is not None:  # the photo's camera in short (its pose matrix is in prediction.json)
+        shown["camera"] = {k: v for k, v in summary["fit"]["camera"].items() if k != "c2w"}
+    print(json.dumps(shown, indent=1))
     print(f"-> {config.out}")

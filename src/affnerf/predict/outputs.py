@@ -1,7 +1,8 @@
 """``affnerf predict``: everything a user gets from one photo, written to one folder.
 
 ``input.png`` (the prepared crop), ``mask.png`` (the object mask used, at the photo's size: white = object, to
-fix and pass back with ``--mask``), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
+fix and pass back with ``--mask``), ``fit.png`` (after a fit to the photo: the crop beside the fitted model rendered
+at the camera found), ``turntable/NNN.png`` (RGB | affordance overlay) and ``turntable.gif``,
 ``affordance_model.ply`` (vertex colours and an integer vertex property ``affordance``),
 ``affordance_model.glb``, and ``prediction.json`` (classes present, their surface areas, how confidently the object
 was separated from its background, the photo's camera and the fit to the photo, the mesh or why there is none, the
@@ -27,14 +28,13 @@ import torch
 from PIL import Image
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
-from affnerf.data.crop import crop_window
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.pictures.compose import overlay_affordance
 from affnerf.predict.image import save_mask
 from affnerf.predict.invert import InversionConfig, InversionResult
 from affnerf.predict.mesh import class_areas
-from affnerf.predict.predictor import Predictor, turntable_poses
+from affnerf.predict.predictor import EncodedObject, Predictor, turntable_poses
 from affnerf.predict.segment import SegmentMethod
 from affnerf.predict.viewpoint import camera_pose
 
@@ -114,20 +114,6 @@ def fit_record(result: InversionResult, steps: int, crop_fov_deg: float) -> dict
     }
 
 
-def crop_fov(mask: np.ndarray, fov_deg: float) -> float:
-    """Horizontal (= vertical) field of view, degrees, of the square crop cut around ``mask`` (H, W) from a photo
-    of horizontal field of view ``fov_deg``.
-
-    Example:
-        >>> m = np.zeros((300, 400), bool); m[100:200, 150:250] = True
-        >>> round(crop_fov(m, 60.0), 2)
-        19.01
-    """
-    side = crop_window(mask)[2]
-    focal = 0.5 * mask.shape[1] / math.tan(math.radians(fov_deg) / 2.0)
-    return math.degrees(2.0 * math.atan(0.5 * side / focal))
-
-
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
     """Write the mesh with its class colours as binary glTF."""
     data = mesh.to_trimesh().export(file_type="glb")
@@ -140,8 +126,9 @@ def _gif(frames: list[np.ndarray], path: Path) -> None:
     images[0].save(path, save_all=True, append_images=images[1:], duration=120, loop=0)
 
 
-#: The mesh files of a prediction; removed from OUT when a new prediction there has no surface.
-MESH_FILES = ("affordance_model.ply", "affordance_model.glb")
+#: Files a prediction writes only sometimes (the mesh when there is a surface, the fit's picture when it fits);
+#: removed from OUT when a new prediction there does not write them.
+OPTIONAL_FILES = ("affordance_model.ply", "affordance_model.glb", "fit.png")
 
 
 def mesh_record(mesh: LabelledMesh, resolution: int, level: float) -> dict[str, Any]:
@@ -159,9 +146,27 @@ def _clear_stale(out: Path, files: list[str]) -> None:
     """Remove from ``out`` the turntable folder and any mesh file the new prediction does not write."""
     if (out / "turntable").exists():
         shutil.rmtree(out / "turntable")
-    for name in MESH_FILES:
+    for name in OPTIONAL_FILES:
         if name not in files and (out / name).is_file():
             (out / name).unlink()
+
+
+#: Side of each panel of ``fit.png``, pixels.
+FIT_PICTURE_SIDE = 128
+
+
+def fit_picture(predictor: Predictor, obj: EncodedObject) -> np.ndarray:
+    """(S, 3S, 3) uint8 check of the fit: the encoders' crop | the fitted model rendered at the camera the fit
+    found, through the same crop | that render's affordance overlay. When the middle panel does not look like the
+    first, the camera or the fit is wrong."""
+    assert obj.inversion is not None and obj.crop_camera is not None and obj.prepared is not None
+    crop_k = obj.crop_camera.scaled(FIT_PICTURE_SIDE / obj.crop_camera.width)
+    pose = camera_pose(*(torch.tensor(float(v), dtype=torch.float64) for v in obj.inversion.camera)).numpy()
+    view = predictor.render(obj, crop_k, pose)
+    rgb = np.round(np.clip(view.rgb, 0, 1) * 255).astype(np.uint8)
+    side = (crop_k.width, crop_k.height)
+    crop = np.asarray(Image.fromarray(obj.prepared.crop).resize(side, Image.BILINEAR))
+    return np.concatenate([crop, rgb, overlay_affordance(rgb, view.labels)], axis=1)
 
 
 def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, Any]:
@@ -187,6 +192,9 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
         files = ["input.png", "mask.png"]
         Image.fromarray(obj.prepared.crop).save(tmp / "input.png")
         save_mask(tmp / "mask.png", obj.prepared.mask)
+        if obj.inversion is not None:
+            Image.fromarray(fit_picture(predictor, obj)).save(tmp / "fit.png")
+            files.append("fit.png")
         (tmp / "turntable").mkdir()
         for i, frame in enumerate(frames):
             Image.fromarray(frame).save(tmp / "turntable" / f"{i:03d}.png")
@@ -200,6 +208,9 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             files += ["affordance_model.ply", "affordance_model.glb"]
             areas = class_areas(mesh)
         names = predictor.classes
+        fit = None
+        if obj.inversion is not None:
+            fit = fit_record(obj.inversion, config.fit_steps, math.degrees(obj.crop_camera.camera_angle_x))
         summary = {
             "image": str(config.image),
             "model": str(predictor.loaded.path),
@@ -210,9 +221,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
             **mesh_record(mesh, config.resolution, level),
-            "fit": None
-            if obj.inversion is None
-            else fit_record(obj.inversion, config.fit_steps, crop_fov(obj.prepared.mask, config.fov)),  # fmt: skip
+            "fit": fit,
             "files": files + ["prediction.json"],
         }
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")

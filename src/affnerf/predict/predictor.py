@@ -36,12 +36,14 @@ from affnerf.rendering.grid import OccupancyGrid
 @dataclass
 class EncodedObject:
     """An object seen in one image: its codes, how its image was prepared, (once built) its occupancy grid, and
-    (once fitted to its image) how the fit went."""
+    (once fitted to its image) how the fit went and the intrinsics of the crop it was fitted in (with
+    ``inversion.camera``, the camera of the encoders' crop in the canonical frame)."""
 
     codes: Codes
     prepared: PreparedImage | None = None
     grid: OccupancyGrid | None = None
     inversion: InversionResult | None = None
+    crop_camera: Intrinsics | None = None
 
 
 def turntable_poses(count: int, elevation_deg: float = 25.0, radius: float = 0.75) -> np.ndarray:
@@ -151,6 +153,7 @@ class Predictor:
         target = crop_target(obj.prepared.rgb, mask, k, size, self.loaded.background)
         result = invert(self.loaded.model, obj.codes, target, np.asarray(self.loaded.background), config)
         obj.codes, obj.grid, obj.inversion = result.codes, None, result
+        obj.crop_camera = Intrinsics(size, size, *(float(v) for v in target.intrinsics))
         return result
 
     def render(self, obj: EncodedObject, intrinsics: Intrinsics, c2w: np.ndarray) -> RenderedView:
