@@ -147,10 +147,14 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
     return out
 
 
-def predictions(checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]], tmp: Path) -> dict[str, Any]:
-    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render."""
+def predictions(
+    checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]], tmp: Path, fit_steps: int
+) -> dict[str, Any]:
+    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render (each
+    fitted to its photo for ``fit_steps`` first, as ``affnerf predict`` does; 0 = the encoders' codes)."""
     from affnerf.eval.surface import sample_seed, score_mesh, true_samples
     from affnerf.metrics.segmentation import confusion_matrix, mean_iou
+    from affnerf.predict.invert import InversionConfig
     from affnerf.predict.predictor import Predictor
     from affnerf.predict.shipped import shipped_model
 
@@ -165,6 +169,8 @@ def predictions(checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]]
         truth = true_samples(obj, 0)
         for kind, path in paths.items():
             enc = predictor.encode_image(path)
+            if fit_steps > 0:
+                predictor.fit(enc, InversionConfig(steps=fit_steps))
             conf = sum(confusion_matrix(obj.affordance(i), predictor.render(enc, obj.record.intrinsics,
                                         obj.pose(i)).labels, n) for i in others)  # fmt: skip
             scores[kind]["miou"].append(mean_iou(conf))
@@ -172,6 +178,7 @@ def predictions(checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]]
             scores[kind]["fscore_1cm"].append(surf["fscore_1cm"] if surf else 0.0)
     return {
         "checkpoint": checkpoint,
+        "fit_steps": fit_steps,
         "objects": len(cases),
         **{kind: {m: round(float(np.mean(v)), 4) for m, v in s.items()} for kind, s in scores.items()},
     }
@@ -184,6 +191,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--checkpoint", "--run", default=None, help="also score predictions (a run, or 'shipped')")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
+    parser.add_argument("--fit-steps", type=int, default=30, help="predictions: fit to the photo (0 = off)")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
     ds = Dataset.open(args.data)
@@ -223,7 +231,7 @@ def main() -> None:
     }
     if args.checkpoint:
         with tempfile.TemporaryDirectory() as tmp:
-            result["prediction"] = predictions(args.checkpoint, cases, Path(tmp))
+            result["prediction"] = predictions(args.checkpoint, cases, Path(tmp), args.fit_steps)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     for key in ("mask_iou_mean", "seconds_per_image_median", "salient_threshold_sweep"):
