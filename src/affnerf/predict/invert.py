@@ -12,8 +12,10 @@ optimising the latent codes (and the unknown camera) so that the decoder renders
    told apart by colour.
 2. **Code fitting** (:func:`fit_codes`): Adam on the shape and appearance codes and on the camera's angles and
    distance, minimising, over the crop's pixels rendered at a low resolution, colour MSE plus the binary
-   cross-entropy of opacity against the mask, plus a prior that keeps the codes near the encoder's (squared
-   distance relative to the codes' own size). The decoder's weights never change.
+   cross-entropy of opacity against the mask; plus the cross-entropy of the affordance, on those pixels and at
+   points inside the encoded object, against what the encoder's codes give there (the fit may move and recolour
+   surfaces, not relabel parts: without it, a fit relabels thin parts); plus a prior that keeps the codes near the
+   encoder's (squared distance relative to the codes' own size). The decoder's weights never change.
 
 Everything happens in the crop the encoders saw: its intrinsics come from the image's (a dataset's
 ``transforms.json``, or a 60° field of view for a photo) and the crop window, so the fitted camera is a real
