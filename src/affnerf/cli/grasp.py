@@ -34,7 +34,8 @@ def plan(
     (a dataset mesh), else the typical size of --category, else it is taken as metres. Antipodal candidate pairs
     are sampled on the surface (on the wanted affordance only, when given), refined all at once by a
     gradient-based local search, closed on the mesh, checked for gripper collisions and ranked by the
-    Ferrari-Canny epsilon. Writes OUT/grasps.json (poses in the metric object frame, with the size used),
+    Ferrari-Canny epsilon. Writes OUT/grasps.json (poses in the metric object frame, with the size used; for a
+    prediction fitted to its photo, also in the photo's camera frame: `camera`, conventions §6),
     OUT/grasps.glb (mesh and gripper models) and OUT/grasps.png. When no grasp is found, says why on stderr.
 
     Args:

@@ -14,6 +14,7 @@ from PIL import Image
 from affnerf.data.format import check_pose
 from affnerf.errors import input_error
 from affnerf.fileio import read_json_file, write_json_atomic
+from affnerf.grasp.camera_frame import camera_record
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
 from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
@@ -35,9 +36,12 @@ def write_grasps(
     gripper: ParallelJawGripper,
     size: dict[str, Any] | None = None,
     no_grasp: dict[str, Any] | None = None,
+    camera: dict[str, Any] | None = None,
 ) -> None:
     """Write ``grasps.json`` (conventions §6): poses in the metric object frame (canonical × 1 / ``size["scale"]``),
-    ``size`` as :meth:`affnerf.grasp.size.ObjectSize.to_json`, and why there is no grasp when there is none."""
+    ``size`` as :meth:`affnerf.grasp.size.ObjectSize.to_json`, why there is no grasp when there is none, and the
+    grasps in the photo's camera frame when the mesh is a prediction fitted to its photo
+    (:func:`affnerf.grasp.camera_frame.camera_record`)."""
     write_json_atomic(
         path,
         {
@@ -49,6 +53,7 @@ def write_grasps(
             "gripper": {"type": "parallel", **gripper.__dict__},
             "grasps": [g.to_json() for g in grasps],
             "no_grasp": no_grasp,
+            "camera": camera,
         },
     )
 
@@ -188,7 +193,9 @@ def plan_into(
     why = None if grasps else explain_no_grasps(obj, config, gripper, size.source)
     out.mkdir(parents=True, exist_ok=True)
     size_json = size.to_json(extent(canonical.vertices))
-    write_grasps(out / "grasps.json", grasps, str(mesh), config.affordance, gripper, size_json, why)
+    poses = np.array([g.pose for g in grasps]).reshape(-1, 4, 4)
+    camera = camera_record(mesh, poses, size.factor)
+    write_grasps(out / "grasps.json", grasps, str(mesh), config.affordance, gripper, size_json, why, camera)
     export_scene(out / "grasps.glb", obj, grasps, gripper)
     save_png(out / "grasps.png", render_grasps(obj, grasps, gripper))
     return PlannedGrasps(grasps, obj, size, why)
