@@ -79,6 +79,7 @@ $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf,retrie
 # the same model with test-time inversion (what `affnerf predict` does), and the inversion settings on validation
 $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf-fit --out "$E" $EVAL
 .venv/bin/python benchmarks/inversion_sweep.py --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$R"
+.venv/bin/python benchmarks/fit_camera_accuracy.py --data "$W/data" --out "$R/fit_camera_accuracy.json"
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --out "$E" $EVAL
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --input-views 3 --out "$E" $EVAL
 
