@@ -169,6 +169,17 @@ def fit_picture(predictor: Predictor, obj: EncodedObject) -> np.ndarray:
     return np.concatenate([crop, rgb, overlay_affordance(rgb, view.labels)], axis=1)
 
 
+def _write_turntable(folder: Path, frames: list[np.ndarray]) -> list[str]:
+    """Write ``turntable/NNN.png`` and ``turntable.gif`` into ``folder``; returns their names."""
+    (folder / "turntable").mkdir()
+    names = []
+    for i, frame in enumerate(frames):
+        Image.fromarray(frame).save(folder / "turntable" / f"{i:03d}.png")
+        names.append(f"turntable/{i:03d}.png")
+    _gif(frames, folder / "turntable.gif")
+    return [*names, "turntable.gif"]
+
+
 def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, Any]:
     """Run the whole prediction and write its files; returns the content of ``prediction.json``.
 
@@ -185,6 +196,10 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
         rgb = np.round(view.rgb * 255).astype(np.uint8)
         frames.append(np.concatenate([rgb, overlay_affordance(rgb, view.labels)], axis=1))
     mesh, level = predictor.surface(obj, config.resolution, config.level)
+    fit, check = None, None
+    if obj.inversion is not None:
+        fit = fit_record(obj.inversion, config.fit_steps, math.degrees(obj.crop_camera.camera_angle_x))
+        check = fit_picture(predictor, obj)
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out))
@@ -192,15 +207,10 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
         files = ["input.png", "mask.png"]
         Image.fromarray(obj.prepared.crop).save(tmp / "input.png")
         save_mask(tmp / "mask.png", obj.prepared.mask)
-        if obj.inversion is not None:
-            Image.fromarray(fit_picture(predictor, obj)).save(tmp / "fit.png")
+        if check is not None:
+            Image.fromarray(check).save(tmp / "fit.png")
             files.append("fit.png")
-        (tmp / "turntable").mkdir()
-        for i, frame in enumerate(frames):
-            Image.fromarray(frame).save(tmp / "turntable" / f"{i:03d}.png")
-            files.append(f"turntable/{i:03d}.png")
-        _gif(frames, tmp / "turntable.gif")
-        files.append("turntable.gif")
+        files += _write_turntable(tmp, frames)
         areas: dict[int, float] = {}
         if len(mesh.faces):
             write_labelled_ply(tmp / "affordance_model.ply", mesh)
@@ -208,9 +218,6 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             files += ["affordance_model.ply", "affordance_model.glb"]
             areas = class_areas(mesh)
         names = predictor.classes
-        fit = None
-        if obj.inversion is not None:
-            fit = fit_record(obj.inversion, config.fit_steps, math.degrees(obj.crop_camera.camera_angle_x))
         summary = {
             "image": str(config.image),
             "model": str(predictor.loaded.path),
