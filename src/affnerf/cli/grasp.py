@@ -34,9 +34,8 @@ def plan(
     (a dataset mesh), else the typical size of --category, else it is taken as metres. Antipodal candidate pairs
     are sampled on the surface (on the wanted affordance only, when given), refined all at once by a
     gradient-based local search, closed on the mesh, checked for gripper collisions and ranked by the
-    Ferrari-Canny epsilon. Writes OUT/grasps.json (poses in the metric object frame, with the size used; for a
-    prediction fitted to its photo, also in the photo's camera frame: `camera`, conventions §6),
-    OUT/grasps.glb (mesh and gripper models) and OUT/grasps.png. When no grasp is found, says why on stderr.
+    Ferrari-Canny epsilon. Writes OUT/grasps.json (metric object frame, size used; for a fitted prediction also
+    the photo's camera frame, conventions §6), OUT/grasps.glb and OUT/grasps.png. No grasp: stderr says why.
 
     Args:
         mesh: the mesh (a dataset's mesh.ply or a predicted affordance_model.ply).

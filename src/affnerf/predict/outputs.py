@@ -169,6 +169,15 @@ def fit_picture(predictor: Predictor, obj: EncodedObject) -> np.ndarray:
     return np.concatenate([crop, rgb, overlay_affordance(rgb, view.labels)], axis=1)
 
 
+def _write_mesh(folder: Path, mesh: LabelledMesh) -> list[str]:
+    """Write ``affordance_model.ply`` and ``.glb`` into ``folder`` when the mesh has faces; returns their names."""
+    if not len(mesh.faces):
+        return []
+    write_labelled_ply(folder / "affordance_model.ply", mesh)
+    export_glb(folder / "affordance_model.glb", mesh)
+    return ["affordance_model.ply", "affordance_model.glb"]
+
+
 def _write_turntable(folder: Path, frames: list[np.ndarray]) -> list[str]:
     """Write ``turntable/NNN.png`` and ``turntable.gif`` into ``folder``; returns their names."""
     (folder / "turntable").mkdir()
@@ -211,12 +220,8 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             Image.fromarray(check).save(tmp / "fit.png")
             files.append("fit.png")
         files += _write_turntable(tmp, frames)
-        areas: dict[int, float] = {}
-        if len(mesh.faces):
-            write_labelled_ply(tmp / "affordance_model.ply", mesh)
-            export_glb(tmp / "affordance_model.glb", mesh)
-            files += ["affordance_model.ply", "affordance_model.glb"]
-            areas = class_areas(mesh)
+        files += _write_mesh(tmp, mesh)
+        areas = class_areas(mesh) if len(mesh.faces) else {}
         names = predictor.classes
         summary = {
             "image": str(config.image),
