@@ -28,15 +28,14 @@ from affnerf.data.dataset import Dataset, interleave_categories
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.model.inputs import dataset_views
-from affnerf.predict.invert import InversionConfig, dataset_crop_target, invert
+from affnerf.predict.invert import InversionConfig, InversionResult, dataset_crop_target, invert
 from affnerf.predict.loading import load_model
 from affnerf.predict.shipped import shipped_model
-from affnerf.predict.viewpoint import camera_pose
 
 
-def camera_errors(found: tuple[float, float, float], true_c2w: np.ndarray) -> dict[str, float]:
-    """Errors of a found (azimuth, elevation, distance) camera against a true (4, 4) camera-to-canonical pose."""
-    pose = camera_pose(*(torch.tensor(v, dtype=torch.float64) for v in found)).numpy()
+def camera_errors(result: InversionResult, true_c2w: np.ndarray) -> dict[str, float]:
+    """Errors of the camera a fit found against a true (4, 4) camera-to-canonical pose."""
+    found, pose = result.camera, result.camera_to_world()
     eye = true_c2w[:3, 3]
     azimuth, elevation = math.atan2(eye[1], eye[0]), math.asin(eye[2] / np.linalg.norm(eye))
     cos = (np.trace(pose[:3, :3].T @ true_c2w[:3, :3]) - 1.0) / 2.0
@@ -79,7 +78,7 @@ def main() -> None:
             codes = model.encode_views(images, intr, poses)
         target = dataset_crop_target(obj, view, size)
         result = invert(model, codes, target, np.asarray(loaded.background), InversionConfig(seed=view))
-        errors = camera_errors(result.camera, obj.pose(view))
+        errors = camera_errors(result, obj.pose(view))
         per_category.setdefault(obj.record.category, []).append(errors)
         print(f"{obj.record.object_id:18s} " + " ".join(f"{k} {v:.3f}" for k, v in errors.items()), flush=True)
     every = [r for rows in per_category.values() for r in rows]

@@ -13,25 +13,18 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.data.format import check_pose
-from affnerf.fileio import read_json_file
+from affnerf.predict.outputs import read_fit_camera
 
 
 def fitted_camera_pose(mesh: Path) -> np.ndarray | None:
-    """(4, 4) camera-to-canonical pose of the photo a predicted mesh came from: ``fit.camera.c2w`` of the
-    ``prediction.json`` beside ``mesh``; None when there is no such file or it holds no fit (``--fit-steps 0``).
+    """(4, 4) camera-to-canonical pose of the photo a predicted mesh came from (:func:`affnerf.predict.outputs.
+    read_fit_camera` of the ``prediction.json`` beside ``mesh``); None without one or without a fit.
 
     Raises:
         AffnerfError: naming ``prediction.json`` when it is unreadable or its pose is not a rigid 4x4.
     """
-    path = Path(mesh).parent / "prediction.json"
-    if not path.is_file():
-        return None
-    data = read_json_file(path)
-    fit = data.get("fit") if isinstance(data, dict) else None
-    if not isinstance(fit, dict) or not isinstance(fit.get("camera"), dict) or "c2w" not in fit["camera"]:
-        return None
-    return check_pose(fit["camera"]["c2w"], path, "fit.camera.c2w")
+    found = read_fit_camera(Path(mesh).parent / "prediction.json")
+    return None if found is None else found[0]
 
 
 def object_to_camera(c2w: np.ndarray, factor: float) -> np.ndarray:

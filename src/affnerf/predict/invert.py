@@ -35,6 +35,7 @@ from affnerf.data.crop import crop_intrinsics, crop_object, crop_window, resampl
 from affnerf.data.dataset import ObjectData
 from affnerf.model.affnerf import Codes
 from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import POINTS_PER_CHUNK
 from affnerf.model.raymarch import RayOutputs
 from affnerf.predict.viewpoint import camera_grid, camera_pose, project_silhouettes, silhouette_iou
 from affnerf.rendering.rays import pixel_rays
@@ -148,6 +149,10 @@ class InversionResult:
     loss_start: float
     loss_end: float
 
+    def camera_to_world(self) -> np.ndarray:
+        """(4, 4) camera-to-canonical pose of :attr:`camera` (OpenGL convention, conventions §1)."""
+        return camera_pose(*(torch.tensor(float(v), dtype=torch.float64) for v in self.camera)).numpy()
+
 
 def _resize_mask(mask: np.ndarray, size: int) -> np.ndarray:
     """An (S, S) float mask area-averaged to (size, size): the object's coverage of each pixel, in [0, 1]."""
@@ -158,12 +163,13 @@ def _resize_mask(mask: np.ndarray, size: int) -> np.ndarray:
 @torch.no_grad()
 def object_points(model: ConditionedNeRF, codes: Codes, resolution: int, level: float) -> np.ndarray:
     """(P, 3) centres of the cells of a ``resolution``^3 grid over the scene cube where the encoded object's
-    density exceeds ``level``."""
+    density exceeds ``level``. (Not :func:`affnerf.rendering.grid.build_grid`, whose cell centres differ in the
+    last float bits: the fit amplifies that into other figures than the committed ones.)"""
     h = model.config.scene_half_extent
     axis = (torch.arange(resolution, dtype=torch.float32) + 0.5) / resolution * 2 * h - h
     pts = torch.stack(torch.meshgrid(axis, axis, axis, indexing="ij"), -1).reshape(-1, 3)
     density, _ = model.point_fields(codes)
-    values = torch.cat([density(chunk).cpu() for chunk in pts.split(65536)])
+    values = torch.cat([density(chunk).cpu() for chunk in pts.split(POINTS_PER_CHUNK)])
     return pts[values > level].numpy().astype(np.float64)
 
 

@@ -24,10 +24,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
 from PIL import Image
 
 from affnerf.data.cameras import DEFAULT_CAMERA_ANGLE_X, Intrinsics
+from affnerf.data.format import check_pose
+from affnerf.fileio import read_json_file
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.pictures.compose import overlay_affordance
@@ -36,7 +37,6 @@ from affnerf.predict.invert import InversionConfig, InversionResult
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import EncodedObject, Predictor, turntable_poses
 from affnerf.predict.segment import SegmentMethod
-from affnerf.predict.viewpoint import camera_pose
 
 logger = logging.getLogger(__name__)
 
@@ -98,7 +98,7 @@ def fit_record(result: InversionResult, steps: int, crop_fov_deg: float) -> dict
     """The ``fit`` entry of ``prediction.json``: the photo's camera in the canonical frame (its angles and distance,
     and as a camera-to-canonical pose), the field of view of the crop the encoders saw, and the fit's losses."""
     az, el, dist = result.camera
-    pose = camera_pose(*(torch.tensor(float(v), dtype=torch.float64) for v in result.camera)).numpy()
+    pose = result.camera_to_world()
     return {
         "steps": steps,
         "camera": {
@@ -112,6 +112,25 @@ def fit_record(result: InversionResult, steps: int, crop_fov_deg: float) -> dict
         "loss_before": round(result.loss_start, 5),
         "loss_after": round(result.loss_end, 5),
     }
+
+
+def read_fit_camera(prediction: Path) -> tuple[np.ndarray, float | None] | None:
+    """The camera a fitted prediction recorded (``fit.camera`` of its ``prediction.json``): the (4, 4)
+    camera-to-canonical pose and the crop's field of view in degrees (None when absent). None when there is no such
+    file, or it holds no fit (``--fit-steps 0``).
+
+    Raises:
+        AffnerfError: naming the file, when it is unreadable or the pose is not a rigid 4x4.
+    """
+    if not Path(prediction).is_file():
+        return None
+    data = read_json_file(Path(prediction))
+    fit = data.get("fit") if isinstance(data, dict) else None
+    camera = fit.get("camera") if isinstance(fit, dict) else None
+    if not isinstance(camera, dict) or "c2w" not in camera:
+        return None
+    fov = camera.get("crop_fov_deg")
+    return check_pose(camera["c2w"], Path(prediction), "fit.camera.c2w"), fov if isinstance(fov, int | float) else None
 
 
 def export_glb(path: Path, mesh: LabelledMesh) -> None:
@@ -161,7 +180,7 @@ def fit_picture(predictor: Predictor, obj: EncodedObject) -> np.ndarray:
     first, the camera or the fit is wrong."""
     assert obj.inversion is not None and obj.crop_camera is not None and obj.prepared is not None
     crop_k = obj.crop_camera.scaled(FIT_PICTURE_SIDE / obj.crop_camera.width)
-    pose = camera_pose(*(torch.tensor(float(v), dtype=torch.float64) for v in obj.inversion.camera)).numpy()
+    pose = obj.inversion.camera_to_world()
     view = predictor.render(obj, crop_k, pose)
     rgb = np.round(np.clip(view.rgb, 0, 1) * 255).astype(np.uint8)
     side = (crop_k.width, crop_k.height)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.errors import input_error
+from affnerf.errors import AffnerfError, input_error
 
 #: Mesh files looked for inside a folder, in this order.
 MESH_NAMES = ("affordance_model.ply", "mesh.ply")
@@ -146,18 +146,19 @@ def fitted_camera(image: Path) -> InputCamera | None:
     """The camera the fit found for a prediction's ``input.png`` (``fit.camera`` of the ``prediction.json`` beside
     it: its camera-to-canonical pose and the crop's field of view), or None when there is none (``--fit-steps 0``,
     an older prediction, an unreadable file)."""
+    from affnerf.predict.outputs import read_fit_camera
+
     try:
-        camera = json.loads((image.parent / "prediction.json").read_text())["fit"]["camera"]
-        c2w, fov = np.asarray(camera["c2w"], np.float64), math.radians(float(camera["crop_fov_deg"]))
-    except (OSError, ValueError, KeyError, TypeError):
+        found = read_fit_camera(image.parent / "prediction.json")
+    except AffnerfError:
         return None
-    if c2w.shape != (4, 4) or not np.isfinite(c2w).all() or not 0.0 < fov < math.pi:
+    if found is None or found[1] is None or not 0.0 < found[1] < 180.0:
         return None
     note = (
         "The camera the fit to the photo found (prediction.json: fit.camera), drawn with the crop the encoders saw "
         "on its axis (the crop's own offset from the photo's centre is not shown)."
     )
-    return InputCamera(c2w, fov, 1.0, image, False, note)
+    return InputCamera(found[0], math.radians(found[1]), 1.0, image, False, note)
 
 
 def prediction_camera(image: Path) -> InputCamera:
