@@ -2,8 +2,11 @@
 
 Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
 random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
-shadow, and each method's mask is compared with the true one. Also measured: the salient model's threshold
-(a sweep over the same saliency maps) and GrabCut's refinement of the salient mask.
+shadow, and each method's mask is compared with the true one. Also measured: the salient model's and the object
+segmenter's thresholds (sweeps over the same probability maps), GrabCut's refinement of either mask, and how well
+the segmenter's confidence and the methods' agreement flag a wrong mask. These six photographs are held out of the
+object segmenter's training (``affnerf.data.composite.HELD_OUT_BACKGROUNDS``), and the dataset below is made with
+another seed than the segmenter's training data, so its objects are new to it too.
 
 Run::
 
@@ -29,6 +32,7 @@ from PIL import Image, ImageFilter
 
 from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.model import segmenter as segnet
 from affnerf.predict import salient, segment
 
 #: scikit-image sample photographs of cluttered or textured scenes (all ship in the wheel, no download).
@@ -77,9 +81,11 @@ def timed(fn, *args) -> tuple[Any, float]:
     return out, time.perf_counter() - start
 
 
-def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, dict]:
-    """IoU and seconds of each method on one composite, the salient threshold sweep, and the confidence measures
-    (border uniformity; IoU of the salient and GrabCut masks)."""
+def measure_one(
+    rgb: np.ndarray, truth: np.ndarray, model, segmenter, segmenter_path: Path | None
+) -> tuple[dict, dict, dict]:
+    """IoU and seconds of each method on one composite, the salient and segmenter threshold sweeps, and the
+    confidence measures (border uniformity; IoU of the salient and GrabCut masks; the segmenter's confidence)."""
     iou, secs = {}, {}
     mask, secs["uniform"] = timed(segment.uniform_background_mask, rgb)
     iou["uniform"] = segment.mask_iou(mask, truth)
@@ -87,21 +93,34 @@ def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, 
     iou["grabcut"] = segment.mask_iou(grabcut, truth)
     sal, secs["salient"] = timed(model.saliency, rgb)
     sweep = {t: segment.mask_iou(segment.largest_component(sal > t), truth) for t in THRESHOLDS}
-    mask, more = timed(segment.largest_component, sal > salient.SALIENT_THRESHOLD)
+    salient_only, more = timed(segment.largest_component, sal > salient.SALIENT_THRESHOLD)
     secs["salient"] += more
-    iou["salient"] = segment.mask_iou(mask, truth)
-    refined, secs["salient+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    iou["salient"] = segment.mask_iou(salient_only, truth)
+    refined, secs["salient+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, salient_only)
     secs["salient+grabcut refine"] += secs["salient"]
     iou["salient+grabcut refine"] = segment.mask_iou(refined, truth)
-    seg, secs["auto"] = timed(segment.segment, rgb, "auto")
+    prob, secs["segmenter"] = timed(segnet.object_probability, segmenter, rgb)
+    seg_sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
+    mask, more = timed(segment.largest_component, prob > segnet.SEGMENTER_THRESHOLD)
+    secs["segmenter"] += more
+    iou["segmenter"] = segment.mask_iou(mask, truth)
+    seg_confidence = float(prob[mask].mean()) if mask.any() else 0.0
+    refined, secs["segmenter+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    secs["segmenter+grabcut refine"] += secs["segmenter"]
+    iou["segmenter+grabcut refine"] = segment.mask_iou(refined, truth)
+    before, secs["salient or grabcut"] = timed(segment.salient_segmentation, rgb, model, True)
+    iou["salient or grabcut"] = segment.mask_iou(before.mask, truth)  # ``auto`` before the object segmenter
+    seg, secs["auto"] = timed(segment.segment, rgb, "auto", "composite", segmenter_path)
     iou["auto"] = segment.mask_iou(seg.mask, truth)
     extra = {
         "auto_source": seg.source,
         "auto_agreement": seg.agreement,
+        "auto_confidence": seg.confidence,
         "border_uniformity": segment.background_uniformity(rgb),
-        "agreement_salient_grabcut": segment.mask_iou(mask, grabcut),
+        "agreement_salient_grabcut": segment.mask_iou(salient_only, grabcut),
+        "segmenter_confidence": seg_confidence,
     }
-    return iou, secs, {"sweep": sweep, **extra}
+    return iou, secs, {"sweep": sweep, "segmenter_sweep": seg_sweep, **extra}
 
 
 def confidence(rows: list[dict], method: str = "auto", key: str = "auto_agreement", below: float = 0.8) -> dict:
@@ -142,7 +161,11 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
             m: mean([r["iou"][m] for r in sub]) for m in methods
         }
     out["salient_threshold_sweep"] = {str(t): mean([r["sweep"][t] for r in rows]) for t in THRESHOLDS}
+    out["segmenter_threshold_sweep"] = {str(t): mean([r["segmenter_sweep"][t] for r in rows]) for t in THRESHOLDS}
     out["confidence_of_auto_by_agreement"] = confidence(rows)
+    out["confidence_of_auto_by_segmenter_confidence"] = confidence(
+        rows, "auto", "auto_confidence", segment.MIN_SEGMENTER_CONFIDENCE
+    )
     out["confidence_of_salient_by_agreement_with_grabcut"] = confidence(rows, "salient", "agreement_salient_grabcut")
     return out
 
@@ -191,6 +214,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--checkpoint", "--run", default=None, help="also score predictions (a run, or 'shipped')")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
+    parser.add_argument("--segmenter", type=Path, default=None, help="object segmenter file (default: shipped)")
     parser.add_argument("--fit-steps", type=int, default=30, help="predictions: fit to the photo (0 = off)")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
@@ -200,13 +224,15 @@ def main() -> None:
     bgs = backgrounds()
     model = salient.load_salient_model()
     model.saliency(np.zeros((32, 32, 3), np.uint8))  # warm-up: the first run pays one-off allocations
+    segmenter = segnet.load_segmenter(args.segmenter)
+    segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
     for k, idx in enumerate(picks):
         obj = ds.load_object(entries[idx])
         view = int(rng.integers(len(obj.record.frames)))
         shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        iou, secs, extra = measure_one(rgb, truth, model)
+        iou, secs, extra = measure_one(rgb, truth, model, segmenter, args.segmenter)
         rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
                      "shadow": shadow, "iou": iou, "secs": secs, **extra})  # fmt: skip
         cases.append((obj, view, rgb))
@@ -223,11 +249,14 @@ def main() -> None:
             "salient_threshold": salient.SALIENT_THRESHOLD,
             "auto_uniformity": segment.AUTO_UNIFORMITY,
             "refine_salient": segment.REFINE_SALIENT,
+            "segmenter": str(args.segmenter or "shipped"),
+            "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
+            "refine_segmenter": segment.REFINE_SEGMENTER,
             "onnx_threads": salient.SESSION_THREADS,
         },  # fmt: skip
         "machine": describe_machine(),
         **summarise(rows),
-        "composites": [{k: v for k, v in r.items() if k != "sweep"} for r in rows],
+        "composites": [{k: v for k, v in r.items() if not k.endswith("sweep")} for r in rows],
     }
     if args.checkpoint:
         with tempfile.TemporaryDirectory() as tmp:

@@ -218,7 +218,7 @@ def test_mask_png_is_the_mask_used_and_reads_back_with_mask(trained_runs, photo,
     mask = np.asarray(Image.open(out / "mask.png"))
     assert "mask.png" in summary["files"] and mask.shape == np.asarray(Image.open(photo["rgb"])).shape[:2]
     assert set(np.unique(mask)) == {0, 255} and summary["separation"]["source"] == "uniform background"
-    assert {"agreement", "compared_with", "note"} <= set(summary["separation"])
+    assert {"agreement", "compared_with", "note", "segmenter_confidence"} <= set(summary["separation"])
     again = tmp_path / "again"
     assert main(_tiny_args(trained_runs, again) + ["--image", str(photo["rgb"]), "--mask", str(out / "mask.png")]) == 0
     assert json.loads((again / "prediction.json").read_text())["object_bbox"] == summary["object_bbox"]
@@ -248,3 +248,35 @@ def test_segment_salient_without_the_extra_is_exit_2_naming_it(trained_runs, pho
     assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--segment", "salient"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "pip install 'affnerf[segment]'" in err and not out.exists()
+
+
+def test_a_cluttered_photo_is_separated_by_a_given_segmenter(trained_runs, train_dataset, trained_segmenter, tmp_path):
+    import skimage.data
+
+    from affnerf.data.composite import cut_to_box, paste
+    from affnerf.data.dataset import Dataset
+
+    ds = Dataset.open(train_dataset)
+    obj = ds.load_object(ds.objects("train")[0])
+    photo = np.ascontiguousarray(skimage.data.coffee()[::4, ::4])
+    rgb, alpha = paste(np.random.default_rng(0), photo, cut_to_box(obj.rgb(0), obj.affordance(0) > 0), (0.5, 0.6))
+    Image.fromarray(rgb).save(tmp_path / "clutter.png")
+    out = tmp_path / "pred"
+    args = ["--image", str(tmp_path / "clutter.png"), "--fit-steps", "0", "--segmenter", str(trained_segmenter)]
+    assert main(_tiny_args(trained_runs, out) + args) == 0
+    separation = json.loads((out / "prediction.json").read_text())["separation"]
+    assert separation["source"] == "segmenter" and 0.5 < separation["segmenter_confidence"] <= 1.0
+    mask = np.asarray(Image.open(out / "mask.png")) > 127
+    assert (mask & (alpha > 0.5)).sum() / (mask | (alpha > 0.5)).sum() > 0.3
+
+
+def test_a_segmenter_file_that_is_not_one_is_exit_2_naming_it(trained_runs, tiny_dataset, tmp_path, capsys):
+    bad = tmp_path / "seg.pt"
+    bad.write_bytes(b"nothing")
+    clutter = tmp_path / "clutter.png"
+    Image.fromarray(np.random.default_rng(0).integers(0, 255, (60, 80, 3), np.uint8)).save(clutter)
+    out = tmp_path / "pred"
+    args = _tiny_args(trained_runs, out) + ["--image", str(clutter), "--segmenter", str(bad)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "seg.pt: not an affnerf object segmenter" in err and not out.exists()

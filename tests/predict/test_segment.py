@@ -75,7 +75,7 @@ def test_uniform_and_none():
 
 
 def test_an_unknown_method_is_an_error():
-    with pytest.raises(AffnerfError, match="unknown separation method 'magic': choose one of auto, salient"):
+    with pytest.raises(AffnerfError, match="unknown separation method 'magic': choose one of auto, segmenter, salient"):
         segment.segment(np.zeros((8, 8, 3), np.uint8), "magic")
 
 
@@ -149,3 +149,31 @@ def test_grabcut_gives_the_same_mask_whatever_opencvs_random_state():
         cv2.setRNGSeed(state)  # what earlier GrabCuts would have left behind
         masks.append(segment.grabcut_mask(photo))
     assert masks[0].any() and all((m == masks[0]).all() for m in masks[1:])
+
+
+def _training_object_on_coffee(dataset, seed: int = 0):
+    """A render of the dataset's first training object pasted onto scikit-image's coffee photo, and its mask."""
+    import skimage.data
+
+    from affnerf.data.composite import cut_to_box, paste
+    from affnerf.data.dataset import Dataset
+
+    ds = Dataset.open(dataset)
+    obj = ds.load_object(ds.objects("train")[0])
+    photo = np.ascontiguousarray(skimage.data.coffee()[::4, ::4])
+    rgb, alpha = paste(np.random.default_rng(seed), photo, cut_to_box(obj.rgb(0), obj.affordance(0) > 0), (0.5, 0.6))
+    return rgb, alpha > 0.5
+
+
+def test_the_segmenter_method_uses_the_given_file_and_records_its_confidence(train_dataset, trained_segmenter):
+    rgb, truth = _training_object_on_coffee(train_dataset)
+    seg = segment.segment(rgb, "segmenter", segmenter=trained_segmenter)
+    assert seg.source == "segmenter" and seg.agreement is None and 0.5 < seg.confidence <= 1.0
+    assert segment.mask_iou(seg.mask, truth) > 0.3
+    auto = segment.segment(rgb, "auto", segmenter=trained_segmenter)  # a given segmenter replaces the salient step
+    assert auto.source == "segmenter" and np.array_equal(auto.mask, seg.mask)
+
+
+def test_the_segmenter_method_without_a_file_is_an_error_saying_how_to_train_one():
+    with pytest.raises(AffnerfError, match="needs a segmenter file: train one on your objects with `affnerf train"):
+        segment.segment(_composite()[0], "segmenter")

@@ -20,12 +20,14 @@ def build_app(args: Sequence[str] = ()) -> SubcommandApp:
     from affnerf.cli import data, demo, evaluate, grasp
     from affnerf.cli.bench import bench
     from affnerf.cli.predict import predict
+    from affnerf.cli.segmenter import train_segmenter
     from affnerf.cli.train import make_train_command
     from affnerf.cli.view import view
 
     app = SubcommandApp()
     app.command(data.app, name="data", help="Generate, import, index, preview and summarise datasets.")
     app.command(make_train_command(args), name="train")
+    app.command(train_segmenter, name="train-segmenter")
     app.command(predict, name="predict")
     app.command(evaluate.app, name="eval", help="Evaluate like the paper's Table 2 (and, with `eval grasp`, Table 3).")
     app.command(evaluate.metrics, name="metrics")

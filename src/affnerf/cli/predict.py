@@ -15,25 +15,26 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     """Predict a 3D affordance model from one image.
 
     The object is separated from its background (--mask, else --segment: by default the image's alpha, else a
-    uniform background when the border is of one colour, else the salient-object model of the optional extra
-    affnerf[segment]), cropped, centred and resized the way training saw objects, and encoded. Unless --fit-steps
-    is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is searched,
-    assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on a CPU).
-    Writes OUT/input.png, OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/fit.png (after a
-    fit: the crop | the fitted model at the camera found | its affordance), OUT/turntable/*.png and
+    uniform background when the border is of one colour, else an object segmenter trained with `affnerf
+    train-segmenter` on your object families when --segmenter FILE is given, else the salient-object model of the
+    optional extra affnerf[segment]), cropped, centred and resized the way training saw objects, and encoded. Unless
+    --fit-steps is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is
+    searched, assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on
+    a CPU). Writes OUT/input.png, OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/fit.png
+    (after a fit: the crop | the fitted model at the camera found | its affordance), OUT/turntable/*.png and
     OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply (vertex colours and an integer vertex
-    property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped
-    with affnerf is used.
+    property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped with
+    affnerf is used.
 
     Warnings (one line each on stderr; the outputs are written): the object could not be separated with confidence
-    (no uniform background, it fills the frame or runs along its border, or two methods disagree: give --mask
-    FILE), recorded under `separation` in prediction.json; --segment auto without the salient model installed
-    (it falls back to GrabCut); the model predicts no surface, so no mesh is written (`"mesh": null` and a
-    `mesh_note` in prediction.json).
+    (no uniform background, it fills the frame or runs along its border, the segmenter is unsure of its mask, or two
+    methods disagree: give --mask FILE), recorded under `separation` in prediction.json; --segment auto without the
+    salient model installed (it falls back to GrabCut); the model predicts no
+    surface, so no mesh is written (`"mesh": null` and a `mesh_note` in prediction.json).
 
     Exit codes: 0 done, warnings included; 2 bad input (an image that is missing, unreadable, a folder, blank or of
-    one colour, an empty or mismatched mask, a run that cannot predict from photos, --segment salient or grabcut
-    without the optional extra installed).
+    one colour, an empty or mismatched mask, a run that cannot predict from photos, a --segmenter file that is
+    not one or --segment segmenter without one, --segment salient or grabcut without the optional extra installed).
     """
     from affnerf.predict.outputs import write_prediction
     from affnerf.predict.predictor import Predictor

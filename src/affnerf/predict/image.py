@@ -30,6 +30,7 @@ from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
 from affnerf.predict.segment import (
     MIN_AGREEMENT,
+    MIN_SEGMENTER_CONFIDENCE,
     Segmentation,
     SegmentMethod,
     background_uniformity,
@@ -57,7 +58,8 @@ class Separation:
     """How the object was told from its background, and how confidently.
 
     Attributes:
-        source: ``mask``, ``alpha``, ``uniform background``, ``salient``, ``grabcut`` or ``whole image``.
+        source: ``mask``, ``alpha``, ``uniform background``, ``segmenter``, ``salient``, ``grabcut`` or
+            ``whole image``.
         object_fraction: share of the image's pixels that are object.
         border_contact: share of the image's border pixels (``BORDER_WIDTH`` wide) that are object.
         background_uniformity: for ``uniform background``, the share of the border pixels within
@@ -66,6 +68,7 @@ class Separation:
         agreement: IoU of the two methods' masks when two ran (``None`` otherwise).
         compared_with: the second method (``None`` when one ran).
         note: why ``auto`` fell back from the salient model (``None`` otherwise).
+        confidence: the object segmenter's mean probability over its mask (``None`` for other methods).
     """
 
     source: str
@@ -76,6 +79,7 @@ class Separation:
     agreement: float | None = None
     compared_with: str | None = None
     note: str | None = None
+    confidence: float | None = None
 
     @property
     def confident(self) -> bool:
@@ -92,6 +96,7 @@ class Separation:
             "background_uniformity": uniformity,
             "agreement": None if self.agreement is None else round(self.agreement, 4),
             "compared_with": self.compared_with,
+            "segmenter_confidence": None if self.confidence is None else round(self.confidence, 4),
             "note": self.note,
             "problems": list(self.problems),
         }
@@ -132,7 +137,11 @@ class PreparedImage:
 
 
 def separation_problems(
-    object_fraction: float, border_contact: float, uniformity: float | None, agreement: float | None = None
+    object_fraction: float,
+    border_contact: float,
+    uniformity: float | None,
+    agreement: float | None = None,
+    confidence: float | None = None,
 ) -> tuple[str, ...]:
     """Why a separation with these measures is doubtful (empty when it is not).
 
@@ -143,6 +152,8 @@ def separation_problems(
         ('the object covers 95% of the image',)
         >>> separation_problems(0.2, 0.0, None, 0.5)
         ('two separation methods agree on only 50% (IoU) of the object',)
+        >>> separation_problems(0.2, 0.0, None, confidence=0.6)
+        ('the object segmenter is only 60% sure of its mask',)
     """
     problems = []
     if uniformity is not None and uniformity < MIN_BACKGROUND_UNIFORMITY:
@@ -153,6 +164,8 @@ def separation_problems(
         problems.append(f"the object touches {border_contact:.0%} of the image border")
     if agreement is not None and agreement < MIN_AGREEMENT:
         problems.append(f"two separation methods agree on only {agreement:.0%} (IoU) of the object")
+    if confidence is not None and confidence < MIN_SEGMENTER_CONFIDENCE:
+        problems.append(f"the object segmenter is only {confidence:.0%} sure of its mask")
     return tuple(problems)
 
 
@@ -161,13 +174,17 @@ def measure_separation(rgb: np.ndarray, mask: np.ndarray, source: str, seg: Segm
 
     A mask file or the whole image (``--segment none``) is the user's own statement of the object and is never
     doubted; other separations are doubtful when the object fills the frame or runs along its border, a uniform
-    background also when the border is not of one colour, and two methods (``seg.agreement``) when they disagree.
+    background also when the border is not of one colour, two methods (``seg.agreement``) when they disagree, and
+    the object segmenter when it is unsure of its mask (``seg.confidence``).
     """
     fraction, contact = float(mask.mean()), float(border_pixels(mask).mean())
     uniformity = background_uniformity(rgb) if source == "uniform background" else None
     agreement, compared, note = (seg.agreement, seg.compared_with, seg.note) if seg else (None, None, None)
-    problems = () if source in TRUSTED_SOURCES else separation_problems(fraction, contact, uniformity, agreement)
-    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note)
+    confidence = seg.confidence if seg else None
+    problems = (
+        () if source in TRUSTED_SOURCES else separation_problems(fraction, contact, uniformity, agreement, confidence)
+    )
+    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note, confidence)
 
 
 def _mask_from_file(path: Path, size: tuple[int, int]) -> np.ndarray:
@@ -184,7 +201,9 @@ def _has_alpha(pil: Image.Image) -> bool:
     return pil.mode in ("RGBA", "LA", "PA") or (pil.mode == "P" and "transparency" in pil.info)
 
 
-def separate(pil: Image.Image, rgb: np.ndarray, image: Path, mask: Path | None, method: str) -> Segmentation:
+def separate(
+    pil: Image.Image, rgb: np.ndarray, image: Path, mask: Path | None, method: str, segmenter: Path | None = None
+) -> Segmentation:
     """The object mask of a photo: the mask file, else (for ``auto``) its alpha channel unless opaque, else
     :func:`affnerf.predict.segment.segment` with ``method``."""
     if mask is not None:
@@ -193,7 +212,7 @@ def separate(pil: Image.Image, rgb: np.ndarray, image: Path, mask: Path | None, 
         alpha = np.asarray(pil.convert("RGBA").getchannel("A")) > 127
         if not alpha.all():  # an opaque alpha channel says nothing
             return Segmentation(alpha, "alpha")
-    return segment(rgb, method, str(image))
+    return segment(rgb, method, str(image), segmenter)
 
 
 def prepare_image(
@@ -202,6 +221,7 @@ def prepare_image(
     background: tuple[float, float, float] = (1.0, 1.0, 1.0),
     mask: Path | None = None,
     segment: SegmentMethod = "auto",
+    segmenter: Path | None = None,
 ) -> PreparedImage:
     """Load a photo and prepare it for the encoders.
 
@@ -213,6 +233,7 @@ def prepare_image(
         segment: how to separate the object without a mask (:data:`affnerf.predict.segment.SEGMENT_METHODS`):
             ``auto`` (alpha, else a uniform background, else the salient model), ``salient``, ``grabcut``,
             ``uniform`` or ``none`` (the whole image is the object).
+        segmenter: the object segmenter file ``auto`` and ``segmenter`` use (default: the shipped one).
 
     Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), and when
     ``auto`` falls back because the optional salient model is not installed.
@@ -225,7 +246,7 @@ def prepare_image(
     image = Path(image)
     pil = open_image(image)
     rgb = to_rgb8(pil)
-    seg = separate(pil, rgb, image, mask, segment)
+    seg = separate(pil, rgb, image, mask, segment, segmenter)
     obj, source = seg.mask, seg.source
     if obj.mean() < MIN_OBJECT_FRACTION:
         what = "the mask is empty" if source == "mask" else "the image is blank or of one colour"

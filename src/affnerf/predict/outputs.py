@@ -51,10 +51,13 @@ class PredictConfig:
         run: a run folder or checkpoint (default: the model shipped with affnerf).
         mask: optional mask image (white or opaque = object), same size as the photo; it overrides ``segment``.
         segment: how to separate the object from its background without ``mask``: ``auto`` (the image's alpha,
-            else a uniform background when the border is of one colour, else the salient-object model of the
-            optional extra ``affnerf[segment]``, falling back to GrabCut with a warning without it), ``salient``,
-            ``grabcut`` (OpenCV, from a centred rectangle), ``uniform`` (the border's colour) or ``none`` (the whole
-            image is the object). The mask used is written as ``mask.png``.
+            else a uniform background when the border is of one colour, else the ``segmenter`` file when given,
+            else the salient-object model of the optional extra ``affnerf[segment]``, falling back to GrabCut with
+            a warning without it), ``segmenter``, ``salient``, ``grabcut`` (OpenCV, from a centred rectangle),
+            ``uniform`` (the border's colour) or ``none`` (the whole image is the object). The mask used is
+            written as ``mask.png``.
+        segmenter: an object segmenter trained with ``affnerf train-segmenter`` on your own object families, for
+            ``segment`` ``segmenter`` (required there) or ``auto`` (tried before the salient model).
         views: turntable views.
         width: turntable image width.
         height: turntable image height.
@@ -79,6 +82,7 @@ class PredictConfig:
     run: Path | None = None
     mask: Path | None = None
     segment: SegmentMethod = "auto"
+    segmenter: Path | None = None
     views: int = 12
     width: int = 200
     height: int = 150
@@ -214,7 +218,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     A model that predicts no surface gives no mesh: the other files are written, ``mesh`` is ``None`` with a
     ``mesh_note`` saying why, and a one-line warning names the checkpoint and the image.
     """
-    obj = predictor.encode_image(config.image, config.mask, config.segment)
+    obj = predictor.encode_image(config.image, config.mask, config.segment, config.segmenter)
     if config.fit_steps > 0:
         predictor.fit(obj, InversionConfig(steps=config.fit_steps), math.radians(config.fov))
     intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)

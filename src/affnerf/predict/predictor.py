@@ -125,11 +125,13 @@ class Predictor:
         images = torch.from_numpy(np.ascontiguousarray(crops)).permute(0, 3, 1, 2).float() / 255.0
         return self.loaded.model.encode(images.to(self.loaded.device))
 
-    def encode_image(self, image: Path, mask: Path | None = None, segment: SegmentMethod = "auto") -> EncodedObject:
-        """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, crop, centre, resize) and
-        encode it."""
+    def encode_image(
+        self, image: Path, mask: Path | None = None, segment: SegmentMethod = "auto", segmenter: Path | None = None
+    ) -> EncodedObject:
+        """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, with the object segmenter
+        file ``segmenter`` or the shipped one; crop, centre, resize) and encode it."""
         size = self.loaded.model.config.encoder_resolution
-        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment)
+        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment, segmenter)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
 
     def fit(

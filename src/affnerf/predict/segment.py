@@ -2,12 +2,18 @@
 
 - ``uniform``: the object is what differs from the colour of the image border (a clean backdrop).
 - ``grabcut``: OpenCV's GrabCut, started from a centred rectangle (the object is assumed inside it).
+- ``segmenter``: an object segmenter trained on your own object families with ``affnerf train-segmenter``
+  (:mod:`affnerf.model.segmenter`, given as a file), largest connected component. Its confidence is the mean
+  probability it gives the pixels of its own mask; below :data:`MIN_SEGMENTER_CONFIDENCE` the separation is
+  doubtful. None ships: one trained for 70 minutes of 2 CPU cores on the procedural families found the object on
+  the composite benchmark's held-out photographs less often than GrabCut (``benchmarks/bench_segment.py``).
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
 - ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
-  the salient model; without the optional extra ``affnerf[segment]`` it falls back to GrabCut (OpenCV) or the
-  uniform estimate, with one warning line. When the salient model ran and OpenCV is there, GrabCut from the
-  centred rectangle also runs, and the two masks' IoU is the ``agreement`` recorded with the separation; when they
-  disagree (IoU < :data:`MIN_AGREEMENT`), ``auto`` takes GrabCut's mask, and the separation is doubtful.
+  the object segmenter when a file is given (and it finds something), else the salient model; without the optional
+  extra ``affnerf[segment]`` it falls back to GrabCut (OpenCV) or the uniform estimate, with one warning line. When
+  the salient model ran and OpenCV is there, GrabCut from the centred rectangle also runs, and the two masks' IoU
+  is the ``agreement`` recorded with the separation; when they disagree (IoU < :data:`MIN_AGREEMENT`), ``auto``
+  takes GrabCut's mask, and the separation is doubtful.
 - ``none``: the whole image is the object.
 
 A given ``--mask`` and (for ``auto``) the image's alpha channel come first: see :func:`affnerf.predict.image.
@@ -18,16 +24,18 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal, get_args
 
 import numpy as np
 from scipy import ndimage
 
 from affnerf.errors import AffnerfError
+from affnerf.model.segmenter import SEGMENTER_THRESHOLD, load_segmenter, object_probability
 from affnerf.predict.salient import INSTALL_HINT, SalientUnavailable, load_salient_model, salient_mask
 
 #: The separation methods of ``--segment``.
-SegmentMethod = Literal["auto", "salient", "grabcut", "uniform", "none"]
+SegmentMethod = Literal["auto", "segmenter", "salient", "grabcut", "uniform", "none"]
 SEGMENT_METHODS: tuple[str, ...] = get_args(SegmentMethod)
 #: Largest per-channel difference (0..1) from the background colour still counted as background.
 BACKGROUND_TOLERANCE = 0.06
@@ -54,6 +62,12 @@ MIN_AGREEMENT = 0.8
 #: Whether ``auto`` and ``salient`` redraw the salient mask's edges with GrabCut from its trimap: on the composite
 #: benchmark it raised the mean mask IoU from 0.483 to 0.490 (better in most composites) for about 0.25 s an image.
 REFINE_SALIENT = True
+#: Whether the object segmenter's mask has its edges redrawn by GrabCut from its trimap.
+REFINE_SEGMENTER = False
+#: Smallest mean probability of the segmenter over its own mask for a confident separation.
+MIN_SEGMENTER_CONFIDENCE = 0.8
+#: How to get an object segmenter (the words of the error when one is needed and not given).
+TRAIN_HINT = "train one on your objects with `affnerf train-segmenter --data DATA --out FILE` and pass --segmenter FILE"
 
 logger = logging.getLogger(__name__)
 
@@ -68,6 +82,7 @@ class Segmentation:
         agreement: IoU of the masks of two methods, when two ran (``None`` otherwise).
         compared_with: the second method (``None`` when one ran).
         note: why ``auto`` did not use the salient model when it wanted to (``None`` otherwise).
+        confidence: the object segmenter's mean probability over its mask (``None`` for other methods).
     """
 
     mask: np.ndarray
@@ -75,6 +90,7 @@ class Segmentation:
     agreement: float | None = None
     compared_with: str | None = None
     note: str | None = None
+    confidence: float | None = None
 
 
 def border_pixels(image: np.ndarray, width: int = BORDER_WIDTH) -> np.ndarray:
@@ -224,6 +240,18 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
     return Segmentation(mask, "salient", agreement, "grabcut")
 
 
+def segmenter_segmentation(rgb: np.ndarray, model) -> Segmentation:
+    """The object segmenter's mask (probability above :data:`~affnerf.model.segmenter.SEGMENTER_THRESHOLD`, largest
+    component; edges redrawn by GrabCut when ``REFINE_SEGMENTER`` and OpenCV is there) and its confidence, the
+    mean probability over the mask (0 when the mask is empty)."""
+    prob = object_probability(model, rgb)
+    mask = largest_component(prob > SEGMENTER_THRESHOLD)
+    if REFINE_SEGMENTER and mask.any() and opencv() is not None:
+        mask = refine_with_grabcut(rgb, mask)
+    confidence = float(prob[mask].mean()) if mask.any() else 0.0
+    return Segmentation(mask, "segmenter", confidence=confidence)
+
+
 def _fallback(rgb: np.ndarray, err: SalientUnavailable, name: str) -> Segmentation:
     """``auto`` without the salient model: GrabCut when OpenCV is there, else the uniform estimate."""
     use_grabcut = opencv() is not None
@@ -235,14 +263,16 @@ def _fallback(rgb: np.ndarray, err: SalientUnavailable, name: str) -> Segmentati
     return Segmentation(uniform_background_mask(rgb), "uniform background", note=note)
 
 
-def segment(rgb: np.ndarray, method: str = "auto", name: str = "image") -> Segmentation:
+def segment(rgb: np.ndarray, method: str = "auto", name: str = "image", segmenter: Path | None = None) -> Segmentation:
     """Separate the object of an (H, W, 3) uint8 photo with ``method`` (one of :data:`SEGMENT_METHODS`).
 
-    ``name`` (the photo's path) starts the fallback warning of ``auto``.
+    ``name`` (the photo's path) starts the fallback warning of ``auto``; ``segmenter`` is an object segmenter file
+    (``affnerf train-segmenter``), used by ``segmenter`` and, when given, by ``auto``.
 
     Raises:
         AffnerfError: an unknown method; ``salient`` without the optional extra, ``grabcut`` without OpenCV,
-            each naming what to install (exit code 2).
+            each naming what to install; ``segmenter`` without a segmenter file, or a file that is not one (exit
+            code 2).
     """
     if method not in SEGMENT_METHODS:
         raise AffnerfError(f"unknown separation method {method!r}: choose one of {', '.join(SEGMENT_METHODS)}")
@@ -252,6 +282,12 @@ def segment(rgb: np.ndarray, method: str = "auto", name: str = "image") -> Segme
         return Segmentation(uniform_background_mask(rgb), "uniform background")
     if method == "grabcut":
         return Segmentation(grabcut_mask(rgb), "grabcut")
+    if method == "segmenter" and segmenter is None:
+        raise AffnerfError(f"--segment segmenter needs a segmenter file: {TRAIN_HINT}")
+    if segmenter is not None and method in ("segmenter", "auto"):
+        seg = segmenter_segmentation(rgb, load_segmenter(segmenter))
+        if method == "segmenter" or seg.mask.any():
+            return seg
     try:
         seg = salient_segmentation(rgb, use_grabcut_on_disagreement=method == "auto")
     except SalientUnavailable as err:

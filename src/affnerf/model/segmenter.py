@@ -1,0 +1,151 @@
+"""The object segmenter: a small U-Net that finds the object of a photo among clutter, trained on our renders.
+
+A generic salient-object model marks what stands out, which in a cluttered photo is often something else (a cup,
+a face, a cat). This network is trained (:mod:`affnerf.train.segmenter`, ``affnerf train-segmenter``) on a dataset's
+own object families pasted onto photographs and synthetic clutter, so it looks for *those* objects, as a detector
+trained on its classes does. It is pure PyTorch and runs in a fraction of a second on a CPU. None ships with
+affnerf: see ``benchmarks/results/segment_composites.json`` for how one trained on 2 CPU cores fares.
+
+Network: an encoder of ``levels`` stages (two 3×3 conv + batch norm + ReLU, then 2× max pooling, channels doubling
+from ``base``), a bottleneck that adds the image's mean feature to every cell (global context: which blob is the
+object depends on the whole photo), and a decoder that upsamples and joins each encoder stage (U-Net skips). The
+input is the photo resized so its larger side is ``input_side`` and padded to a multiple of ``2**levels``; the
+output is one logit per pixel, brought back to the photo's size.
+"""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from PIL import Image
+from torch import nn
+from torch.nn import functional as F
+
+from affnerf.errors import input_error
+
+#: Probability above which a pixel is object.
+SEGMENTER_THRESHOLD = 0.5
+
+
+@dataclass(frozen=True)
+class SegmenterConfig:
+    """Shape of the network.
+
+    Attributes:
+        base: channels of the first stage (doubled at each further stage).
+        levels: encoder stages (the input is padded to a multiple of 2**levels).
+        input_side: larger side, in pixels, of the photo as the network sees it.
+    """
+
+    base: int = 16
+    levels: int = 4
+    input_side: int = 192
+
+
+def conv_block(c_in: int, c_out: int) -> nn.Sequential:
+    """Two 3×3 convolutions, each with batch norm and ReLU."""
+    return nn.Sequential(
+        nn.Conv2d(c_in, c_out, 3, padding=1, bias=False), nn.BatchNorm2d(c_out), nn.ReLU(inplace=True),
+        nn.Conv2d(c_out, c_out, 3, padding=1, bias=False), nn.BatchNorm2d(c_out), nn.ReLU(inplace=True),
+    )  # fmt: skip
+
+
+class ObjectSegmenter(nn.Module):
+    """U-Net with global context: (N, 3, H, W) images in 0..1 → (N, 1, H, W) object logits (H, W multiples of
+    2**levels)."""
+
+    def __init__(self, config: SegmenterConfig = SegmenterConfig()):
+        super().__init__()
+        self.config = config
+        widths = [config.base * 2**i for i in range(config.levels + 1)]
+        self.down = nn.ModuleList([conv_block(3, widths[0])])
+        self.down.extend(conv_block(widths[i], widths[i + 1]) for i in range(config.levels))
+        self.context = nn.Conv2d(2 * widths[-1], widths[-1], 1)
+        ups = (conv_block(widths[i + 1] + widths[i], widths[i]) for i in reversed(range(config.levels)))
+        self.up = nn.ModuleList(ups)
+        self.head = nn.Conv2d(widths[0], 1, 1)
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        skips = []
+        x = images - 0.5
+        for i, block in enumerate(self.down):
+            x = block(x if i == 0 else F.max_pool2d(x, 2))
+            skips.append(x)
+        pooled = x.mean(dim=(2, 3), keepdim=True).expand_as(x)
+        x = F.relu(self.context(torch.cat([x, pooled], dim=1)))
+        for block, skip in zip(self.up, reversed(skips[:-1]), strict=True):
+            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = block(torch.cat([x, skip], dim=1))
+        return self.head(x)
+
+
+def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tensor, tuple[int, int]]:
+    """(1, 3, H', W') float input of an (H, W, 3) uint8 photo, resized to a larger side of ``input_side`` and
+    padded (edge values) at the bottom and right to multiples of 2**levels, with the resized (W, H) before padding.
+
+    Example:
+        >>> x, size = network_input(np.zeros((300, 400, 3), np.uint8), SegmenterConfig())
+        >>> tuple(x.shape), size
+        ((1, 3, 144, 192), (192, 144))
+    """
+    h, w = rgb.shape[:2]
+    s = config.input_side / max(h, w)
+    size = (max(1, round(w * s)), max(1, round(h * s)))
+    small = np.asarray(Image.fromarray(rgb).resize(size, Image.BILINEAR), np.float32) / 255.0
+    m = 2**config.levels
+    pad = (-size[1] % m, -size[0] % m)
+    small = np.pad(small, ((0, pad[0]), (0, pad[1]), (0, 0)), mode="edge")
+    return torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None], size
+
+
+@torch.no_grad()
+def object_probability(model: ObjectSegmenter, rgb: np.ndarray) -> np.ndarray:
+    """(H, W) float32 probability that each pixel of the (H, W, 3) uint8 photo is the object."""
+    x, (w, h) = network_input(rgb, model.config)
+    logits = model(x)[0, 0, :h, :w]
+    prob = torch.sigmoid(logits).numpy().astype(np.float32)
+    full = Image.fromarray(prob, mode="F").resize((rgb.shape[1], rgb.shape[0]), Image.BILINEAR)
+    return np.clip(np.asarray(full, np.float32), 0.0, 1.0)
+
+
+def save_segmenter(model: ObjectSegmenter, path: Path, provenance: dict | None = None) -> None:
+    """Write the network's weights, its config and ``provenance`` (how it was trained) to ``path``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    state = {k: v.detach().clone() for k, v in model.state_dict().items()}
+    torch.save({"config": asdict(model.config), "state": state, "provenance": provenance or {}}, tmp)
+    tmp.replace(path)
+
+
+def read_segmenter(path: Path) -> ObjectSegmenter:
+    """A new segmenter with the weights in ``path``, in eval mode (not cached: safe to train further).
+
+    Raises:
+        AffnerfError: the file is missing or not a segmenter.
+    """
+    try:
+        data = torch.load(path, map_location="cpu", weights_only=True)
+        model = ObjectSegmenter(SegmenterConfig(**data["config"]))
+        model.load_state_dict(data["state"])
+    except (OSError, RuntimeError, KeyError, TypeError, ValueError, EOFError, pickle.UnpicklingError) as err:
+        raise input_error(path, f"not an affnerf object segmenter ({err})") from err
+    return model.eval()
+
+
+_LOADED: dict[Path, ObjectSegmenter] = {}
+
+
+def load_segmenter(path: Path) -> ObjectSegmenter:
+    """The segmenter in ``path``, in eval mode, loaded once per process and file.
+
+    Raises:
+        AffnerfError: the file is missing or not a segmenter.
+    """
+    path = Path(path)
+    if path not in _LOADED:
+        _LOADED[path] = read_segmenter(path)
+    return _LOADED[path]

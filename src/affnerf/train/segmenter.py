@@ -1,0 +1,181 @@
+"""Training the object segmenter (:mod:`affnerf.model.segmenter`) on a dataset's renders pasted onto clutter.
+
+The training split's objects (a few views each) are pasted onto photographs and dead-leaves clutter
+(:mod:`affnerf.data.composite`) into a pool of synthetic photos at the network's size. Each step draws a batch from
+the pool (fragments of other objects pasted into the background as distractors), flips it at random and changes its
+colours (the whole photo, and the object on its own, with the encoders' jitter of :mod:`affnerf.train.augment`),
+blur and noise, so lighting and camera quality do not decide the mask. The loss is binary cross-entropy plus a soft
+Dice term (the object is often a small share of the photo). The validation split's objects, on the same kinds of
+background, give the mask IoU logged while training; the photographs held out in
+:data:`affnerf.data.composite.HELD_OUT_BACKGROUNDS` are never used.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+from affnerf.data.composite import Cutout, cut_to_box, photo_library, training_photo
+from affnerf.data.dataset import Dataset
+from affnerf.errors import AffnerfError
+from affnerf.model.segmenter import ObjectSegmenter, SegmenterConfig, read_segmenter, save_segmenter
+from affnerf.train.augment import gaussian_blur, jitter_colour
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class SegmenterTrainConfig:
+    """How to train the object segmenter.
+
+    Attributes:
+        data: dataset folder (``affnerf data generate`` or ``data import``); its ``train`` split is pasted.
+        out: the weight file to write.
+        steps: optimiser steps.
+        batch: photos per step.
+        lr: peak AdamW learning rate (cosine decay to 5 % of it).
+        views_per_object: rendered views of each training object used.
+        pool: synthetic photos made before training (drawn from with replacement, flipped and re-coloured each time).
+        val_photos: validation photos (validation-split objects).
+        jitter: strength of the colour, blur and noise changes (0 = none, 1 = the encoders' default ranges).
+        seed: random seed of the pool and the steps.
+        time_limit_min: stop after this many minutes (0 = no limit); the weights are written either way.
+        init: a segmenter file to start from (its network shape is used), instead of random weights.
+        network: the network's shape.
+    """
+
+    data: Path
+    out: Path
+    steps: int = 3000
+    batch: int = 16
+    lr: float = 2e-3
+    views_per_object: int = 4
+    pool: int = 6000
+    val_photos: int = 96
+    jitter: float = 1.0
+    seed: int = 0
+    time_limit_min: float = 0.0
+    init: Path | None = None
+    network: SegmenterConfig = SegmenterConfig()
+
+
+def load_cutouts(dataset: Dataset, split: str, views: int, rng: np.random.Generator) -> list[Cutout]:
+    """Cutouts of ``views`` random views of every object of ``split`` (mask: ``affordance > 0``)."""
+    cutouts = []
+    for entry in dataset.objects(split):
+        obj = dataset.load_object(entry)
+        for i in rng.permutation(len(obj.record.frames))[:views]:
+            cut = cut_to_box(obj.rgb(int(i)), obj.affordance(int(i)) > 0)
+            if cut is not None:
+                cutouts.append(cut)
+    if not cutouts:
+        raise AffnerfError(f"{dataset.root}: no {split} objects to train the segmenter on")
+    return cutouts
+
+
+def make_pool(
+    cutouts: list[Cutout], photos: list[np.ndarray], count: int, size: tuple[int, int], rng: np.random.Generator
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """(count, 3, H, W) uint8 synthetic photos and (count, 1, H, W) bool masks at ``size`` = (W, H)."""
+    images = torch.empty(count, 3, size[1], size[0], dtype=torch.uint8)
+    masks = torch.empty(count, 1, size[1], size[0], dtype=torch.bool)
+    for k in range(count):
+        rgb, mask = training_photo(rng, cutouts[rng.integers(len(cutouts))], photos, size, cutouts)
+        images[k] = torch.from_numpy(rgb).permute(2, 0, 1)
+        masks[k, 0] = torch.from_numpy(mask)
+    return images, masks
+
+
+def augment_batch(
+    images: torch.Tensor, masks: torch.Tensor, strength: float, g: torch.Generator
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """(N, 3, H, W) float photos in 0..1 and (N, 1, H, W) float masks of a uint8/bool batch: flipped left-right at
+    random, colours changed over the whole photo and over the object, blurred (half of them) and noised."""
+    x, m = images.float() / 255.0, masks.float()
+    flip = torch.rand(x.shape[0], generator=g) < 0.5
+    x[flip], m[flip] = x[flip].flip(-1), m[flip].flip(-1)
+    if strength > 0:
+        x = jitter_colour(x, torch.ones_like(m), strength, g)
+        x = jitter_colour(x, m, strength, g)
+        n = x.shape[0]
+        x = gaussian_blur(x, torch.rand(n, generator=g) * 1.2 * strength * (torch.rand(n, generator=g) < 0.5))
+        x = x + torch.randn(x.shape, generator=g) * (torch.rand(n, generator=g) * 0.03 * strength)[:, None, None, None]
+    return x.clamp(0.0, 1.0), m
+
+
+def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+    """Binary cross-entropy plus soft Dice (1 - 2|P∩M| / (|P| + |M|)) of (N, 1, H, W) logits and 0/1 masks."""
+    bce = F.binary_cross_entropy_with_logits(logits, masks)
+    p = torch.sigmoid(logits)
+    inter = (p * masks).sum(dim=(1, 2, 3))
+    dice = 1.0 - (2.0 * inter + 1.0) / (p.sum(dim=(1, 2, 3)) + masks.sum(dim=(1, 2, 3)) + 1.0)
+    return bce + dice.mean()
+
+
+@torch.no_grad()
+def mean_mask_iou(model: ObjectSegmenter, images: torch.Tensor, masks: torch.Tensor, chunk: int = 32) -> float:
+    """Mean IoU of the thresholded (p > 0.5) masks of uint8 photos against bool masks, at the network's size."""
+    was_training = model.training
+    model.eval()
+    ious = []
+    for s in range(0, images.shape[0], chunk):
+        pred = model(images[s : s + chunk].float() / 255.0) > 0
+        truth = masks[s : s + chunk]
+        inter = (pred & truth).sum(dim=(1, 2, 3)).float()
+        union = (pred | truth).sum(dim=(1, 2, 3)).float().clamp(min=1.0)
+        ious.append(inter / union)
+    model.train(was_training)
+    return float(torch.cat(ious).mean())
+
+
+def network_size(config: SegmenterConfig) -> tuple[int, int]:
+    """(W, H) of the training photos: a 4:3 landscape of the network's input side (a multiple of 2**levels)."""
+    m = 2**config.levels
+    return config.input_side, int(round(config.input_side * 0.75 / m)) * m
+
+
+def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
+    """Train the segmenter and write it to ``cfg.out``; returns the training record (also stored in the file)."""
+    torch.manual_seed(cfg.seed)
+    rng, g = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
+    dataset, size, photos = Dataset.open(cfg.data), network_size(cfg.network), photo_library()
+    start = time.perf_counter()
+    train = make_pool(load_cutouts(dataset, "train", cfg.views_per_object, rng), photos, cfg.pool, size, rng)
+    val = make_pool(load_cutouts(dataset, "val", 2, rng), photos, cfg.val_photos, size, rng)
+    logger.info("pool of %d photos (+%d validation) in %.0f s", cfg.pool, cfg.val_photos, time.perf_counter() - start)
+    model = ObjectSegmenter(cfg.network) if cfg.init is None else read_segmenter(Path(cfg.init))
+    model.train()
+    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=1e-4)
+    curve, step, loss = [], 0, torch.zeros(())
+    while step < cfg.steps:
+        if cfg.time_limit_min and time.perf_counter() - start > 60 * cfg.time_limit_min:
+            break
+        for group in opt.param_groups:
+            group["lr"] = cfg.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+        pick = torch.randint(0, cfg.pool, (cfg.batch,), generator=g)
+        x, m = augment_batch(train[0][pick], train[1][pick], cfg.jitter, g)
+        loss = segmentation_loss(model(x), m)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        step += 1
+        if step % 250 == 0 or step == cfg.steps:
+            minutes, iou = round((time.perf_counter() - start) / 60, 2), round(mean_mask_iou(model, *val), 4)
+            curve.append(
+                {"step": step, "minutes": minutes, "loss": round(float(loss.detach()), 4), "val_mask_iou": iou}
+            )
+            logger.info("%s", curve[-1])
+            partial = {"steps_done": step, "curve": curve, "partial": True}
+            save_segmenter(model.eval(), Path(cfg.out), partial)
+            model.train()
+    record = {"config": {k: str(v) for k, v in asdict(cfg).items()}, "steps_done": step, "curve": curve,
+              "minutes": round((time.perf_counter() - start) / 60, 2), "backgrounds": len(photos)}  # fmt: skip
+    save_segmenter(model.eval(), Path(cfg.out), record)
+    return record

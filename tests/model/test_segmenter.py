@@ -1,0 +1,66 @@
+"""The object segmenter network: shapes, padding, save and load, and the shipped weights on a cluttered photo."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from affnerf.errors import AffnerfError
+from affnerf.model import segmenter as segnet
+
+TINY = segnet.SegmenterConfig(base=4, levels=2, input_side=40)
+
+
+def test_network_input_keeps_the_aspect_and_pads_to_the_stride():
+    x, size = segnet.network_input(np.zeros((30, 50, 3), np.uint8), TINY)
+    assert size == (40, 24) and tuple(x.shape) == (1, 3, 24, 40)
+    x, size = segnet.network_input(np.zeros((50, 27, 3), np.uint8), TINY)
+    assert size == (22, 40) and tuple(x.shape) == (1, 3, 40, 24)  # 22 padded to 24, a multiple of 2**2
+
+
+def test_probability_has_the_photos_size_whatever_its_shape():
+    torch.manual_seed(0)
+    model = segnet.ObjectSegmenter(TINY).eval()
+    for shape in ((30, 50, 3), (51, 17, 3)):
+        prob = segnet.object_probability(model, np.random.default_rng(0).integers(0, 255, shape, np.uint8))
+        assert prob.shape == shape[:2] and prob.dtype == np.float32 and 0.0 <= prob.min() <= prob.max() <= 1.0
+
+
+def test_save_and_load_give_the_same_probabilities(tmp_path):
+    torch.manual_seed(0)
+    model = segnet.ObjectSegmenter(TINY).eval()
+    path = tmp_path / "seg.pt"
+    segnet.save_segmenter(model, path, {"note": "test"})
+    loaded = segnet.load_segmenter(path)
+    assert loaded.config == TINY
+    photo = np.random.default_rng(1).integers(0, 255, (30, 40, 3), np.uint8)
+    assert np.array_equal(segnet.object_probability(model, photo), segnet.object_probability(loaded, photo))
+    assert torch.load(path, weights_only=True)["provenance"] == {"note": "test"}
+
+
+def test_a_file_that_is_not_a_segmenter_is_an_error_naming_it(tmp_path):
+    bad = tmp_path / "bad.pt"
+    bad.write_text("not weights")
+    with pytest.raises(AffnerfError, match="bad.pt: not an affnerf object segmenter"):
+        segnet.load_segmenter(bad)
+
+
+def test_a_trained_segmenter_finds_its_objects_on_a_photo_it_never_saw(train_dataset, trained_segmenter):
+    """Renders of the training objects pasted onto scikit-image's coffee photo (never used in training)."""
+    import skimage.data
+
+    from affnerf.data.composite import cut_to_box, paste
+    from affnerf.data.dataset import Dataset
+    from affnerf.predict.segment import mask_iou
+
+    ds = Dataset.open(train_dataset)
+    obj = ds.load_object(ds.objects("train")[0])
+    photo = np.ascontiguousarray(skimage.data.coffee()[::4, ::4])
+    rng = np.random.default_rng(0)
+    model = segnet.load_segmenter(trained_segmenter)
+    ious = []
+    for view in range(4):
+        rgb, alpha = paste(rng, photo, cut_to_box(obj.rgb(view), obj.affordance(view) > 0), scale=(0.4, 0.7))
+        ious.append(mask_iou(segnet.object_probability(model, rgb) > segnet.SEGMENTER_THRESHOLD, alpha > 0.5))
+    assert np.mean(ious) > 0.3, ious

@@ -1,0 +1,53 @@
+"""Training the object segmenter: pool, augmentation, loss, and a short run that learns."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from affnerf.data.dataset import Dataset
+from affnerf.model.segmenter import SegmenterConfig, load_segmenter, object_probability
+from affnerf.train import segmenter
+
+
+def test_loss_is_low_for_the_right_mask_and_high_for_the_wrong_one():
+    mask = torch.zeros(2, 1, 16, 16)
+    mask[:, :, 4:12, 4:12] = 1.0
+    right = segmenter.segmentation_loss((mask - 0.5) * 20, mask)
+    wrong = segmenter.segmentation_loss((0.5 - mask) * 20, mask)
+    assert right < 0.05 and wrong > 5.0
+
+
+def test_augment_flips_image_and_mask_together():
+    g = torch.Generator().manual_seed(0)
+    images = torch.zeros(8, 3, 8, 8, dtype=torch.uint8)
+    masks = torch.zeros(8, 1, 8, 8, dtype=torch.bool)
+    images[:, :, :, :2], masks[:, :, :, :2] = 255, True
+    x, m = segmenter.augment_batch(images, masks, 0.0, g)
+    for k in range(8):
+        assert torch.equal((x[k, 0] > 0.5), m[k, 0].bool())
+    assert 0 < int(m[:, 0, 0, -1].sum()) < 8  # some were flipped, some not
+
+
+def test_a_short_run_learns_the_masks(train_dataset, trained_segmenter):
+    record = torch.load(trained_segmenter, weights_only=True)["provenance"]
+    assert record["steps_done"] == 120 and record["curve"][-1]["step"] == 120
+    rng = np.random.default_rng(5)
+    ds = Dataset.open(train_dataset)
+    # new photos of the training objects on new clutter (the tiny dataset has one object per category to learn)
+    val = segmenter.make_pool(segmenter.load_cutouts(ds, "train", 8, rng), [], 16, (48, 36), rng)
+    untrained = segmenter.mean_mask_iou(
+        segmenter.ObjectSegmenter(SegmenterConfig(base=8, levels=2, input_side=48)), *val
+    )
+    trained = segmenter.mean_mask_iou(load_segmenter(trained_segmenter), *val)
+    assert trained > max(0.4, untrained + 0.2), (untrained, trained)
+    photo = val[0][0].permute(1, 2, 0).numpy()
+    assert object_probability(load_segmenter(trained_segmenter), photo).shape == photo.shape[:2]
+
+
+def test_training_can_start_from_a_segmenter_file(train_dataset, trained_segmenter, tmp_path):
+    cfg = segmenter.SegmenterTrainConfig(
+        data=train_dataset, out=tmp_path / "more.pt", steps=1, batch=2, pool=4, val_photos=2, init=trained_segmenter
+    )
+    segmenter.train_segmenter(cfg)
+    assert load_segmenter(cfg.out).config == SegmenterConfig(base=8, levels=2, input_side=48)  # the file's shape
