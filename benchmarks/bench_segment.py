@@ -2,16 +2,18 @@
 
 Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
 random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
-shadow, and each method's mask is compared with the true one. Also measured: the salient model's and the object
-segmenter's thresholds (sweeps over the same probability maps), GrabCut's refinement of either mask, and how well
-the segmenter's confidence and the methods' agreement flag a wrong mask. These six photographs are held out of the
-object segmenter's training (``affnerf.data.composite.HELD_OUT_BACKGROUNDS``), and the dataset below is made with
-another seed than the segmenter's training data, so its objects are new to it too.
+shadow, and each method's mask is compared with the true one. Also measured: the salient model's and (with
+``--segmenter``) a trained object segmenter's thresholds (sweeps over the same probability maps), GrabCut's
+refinement of either mask, and how well the segmenter's confidence and the methods' agreement flag a wrong mask.
+These six photographs are held out of the object segmenter's training
+(``affnerf.data.composite.HELD_OUT_BACKGROUNDS``), and the dataset below is made with another seed than the
+segmenter's training data, so its objects are new to it too.
 
 Run::
 
     affnerf data generate --out /tmp/seg/data --objects-per-category 10 --views 4 --seed 7
-    .venv/bin/python benchmarks/bench_segment.py --data /tmp/seg/data [--composites 48] [--checkpoint RUN]
+    .venv/bin/python benchmarks/bench_segment.py --data /tmp/seg/data [--composites 48] [--checkpoint RUN] \
+        [--segmenter FILE]    # a segmenter from `affnerf train-segmenter` (on another dataset's training split)
 
 Writes ``benchmarks/results/segment_composites.json``. With ``--checkpoint`` (a run folder or checkpoint, or
 ``shipped``), a ``Predictor`` also predicts each object from its composite and from its clean render, and the
@@ -81,11 +83,27 @@ def timed(fn, *args) -> tuple[Any, float]:
     return out, time.perf_counter() - start
 
 
-def measure_one(
-    rgb: np.ndarray, truth: np.ndarray, model, segmenter, segmenter_path: Path | None
-) -> tuple[dict, dict, dict]:
-    """IoU and seconds of each method on one composite, the salient and segmenter threshold sweeps, and the
-    confidence measures (border uniformity; IoU of the salient and GrabCut masks; the segmenter's confidence)."""
+def measure_segmenter(rgb: np.ndarray, truth: np.ndarray, segmenter, path: Path) -> tuple[dict, dict, dict]:
+    """IoU and seconds of a trained object segmenter on one composite (alone, with GrabCut's edges, and as ``auto
+    --segmenter``), its threshold sweep and its confidence."""
+    iou, secs = {}, {}
+    prob, secs["segmenter"] = timed(segnet.object_probability, segmenter, rgb)
+    sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
+    mask, more = timed(segment.largest_component, prob > segnet.SEGMENTER_THRESHOLD)
+    secs["segmenter"] += more
+    iou["segmenter"] = segment.mask_iou(mask, truth)
+    refined, secs["segmenter+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    secs["segmenter+grabcut refine"] += secs["segmenter"]
+    iou["segmenter+grabcut refine"] = segment.mask_iou(refined, truth)
+    seg, secs["auto --segmenter"] = timed(segment.segment, rgb, "auto", "composite", path)
+    iou["auto --segmenter"] = segment.mask_iou(seg.mask, truth)
+    confidence = float(prob[mask].mean()) if mask.any() else 0.0
+    return iou, secs, {"segmenter_sweep": sweep, "segmenter_confidence": confidence}
+
+
+def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, dict]:
+    """IoU and seconds of each method on one composite, the salient threshold sweep, and the confidence measures
+    (border uniformity; IoU of the salient and GrabCut masks)."""
     iou, secs = {}, {}
     mask, secs["uniform"] = timed(segment.uniform_background_mask, rgb)
     iou["uniform"] = segment.mask_iou(mask, truth)
@@ -99,28 +117,15 @@ def measure_one(
     refined, secs["salient+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, salient_only)
     secs["salient+grabcut refine"] += secs["salient"]
     iou["salient+grabcut refine"] = segment.mask_iou(refined, truth)
-    prob, secs["segmenter"] = timed(segnet.object_probability, segmenter, rgb)
-    seg_sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
-    mask, more = timed(segment.largest_component, prob > segnet.SEGMENTER_THRESHOLD)
-    secs["segmenter"] += more
-    iou["segmenter"] = segment.mask_iou(mask, truth)
-    seg_confidence = float(prob[mask].mean()) if mask.any() else 0.0
-    refined, secs["segmenter+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
-    secs["segmenter+grabcut refine"] += secs["segmenter"]
-    iou["segmenter+grabcut refine"] = segment.mask_iou(refined, truth)
-    before, secs["salient or grabcut"] = timed(segment.salient_segmentation, rgb, model, True)
-    iou["salient or grabcut"] = segment.mask_iou(before.mask, truth)  # ``auto`` before the object segmenter
-    seg, secs["auto"] = timed(segment.segment, rgb, "auto", "composite", segmenter_path)
+    seg, secs["auto"] = timed(segment.segment, rgb, "auto")
     iou["auto"] = segment.mask_iou(seg.mask, truth)
     extra = {
         "auto_source": seg.source,
         "auto_agreement": seg.agreement,
-        "auto_confidence": seg.confidence,
         "border_uniformity": segment.background_uniformity(rgb),
         "agreement_salient_grabcut": segment.mask_iou(salient_only, grabcut),
-        "segmenter_confidence": seg_confidence,
     }
-    return iou, secs, {"sweep": sweep, "segmenter_sweep": seg_sweep, **extra}
+    return iou, secs, {"sweep": sweep, **extra}
 
 
 def confidence(rows: list[dict], method: str = "auto", key: str = "auto_agreement", below: float = 0.8) -> dict:
@@ -161,11 +166,13 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
             m: mean([r["iou"][m] for r in sub]) for m in methods
         }
     out["salient_threshold_sweep"] = {str(t): mean([r["sweep"][t] for r in rows]) for t in THRESHOLDS}
-    out["segmenter_threshold_sweep"] = {str(t): mean([r["segmenter_sweep"][t] for r in rows]) for t in THRESHOLDS}
+    if "segmenter_sweep" in rows[0]:
+        out["segmenter_threshold_sweep"] = {str(t): mean([r["segmenter_sweep"][t] for r in rows]) for t in THRESHOLDS}
     out["confidence_of_auto_by_agreement"] = confidence(rows)
-    out["confidence_of_auto_by_segmenter_confidence"] = confidence(
-        rows, "auto", "auto_confidence", segment.MIN_SEGMENTER_CONFIDENCE
-    )
+    if "segmenter_confidence" in rows[0]:
+        out["confidence_of_segmenter_by_its_confidence"] = confidence(
+            rows, "segmenter", "segmenter_confidence", segment.MIN_SEGMENTER_CONFIDENCE
+        )
     out["confidence_of_salient_by_agreement_with_grabcut"] = confidence(rows, "salient", "agreement_salient_grabcut")
     return out
 
@@ -214,7 +221,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--checkpoint", "--run", default=None, help="also score predictions (a run, or 'shipped')")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
-    parser.add_argument("--segmenter", type=Path, default=None, help="object segmenter file (default: shipped)")
+    parser.add_argument("--segmenter", type=Path, default=None, help="also measure this trained object segmenter")
     parser.add_argument("--fit-steps", type=int, default=30, help="predictions: fit to the photo (0 = off)")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
@@ -224,15 +231,19 @@ def main() -> None:
     bgs = backgrounds()
     model = salient.load_salient_model()
     model.saliency(np.zeros((32, 32, 3), np.uint8))  # warm-up: the first run pays one-off allocations
-    segmenter = segnet.load_segmenter(args.segmenter)
-    segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
+    segmenter = segnet.load_segmenter(args.segmenter) if args.segmenter else None
+    if segmenter is not None:
+        segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
     for k, idx in enumerate(picks):
         obj = ds.load_object(entries[idx])
         view = int(rng.integers(len(obj.record.frames)))
         shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        iou, secs, extra = measure_one(rgb, truth, model, segmenter, args.segmenter)
+        iou, secs, extra = measure_one(rgb, truth, model)
+        if segmenter is not None:
+            more = measure_segmenter(rgb, truth, segmenter, args.segmenter)
+            iou, secs, extra = {**iou, **more[0]}, {**secs, **more[1]}, {**extra, **more[2]}
         rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
                      "shadow": shadow, "iou": iou, "secs": secs, **extra})  # fmt: skip
         cases.append((obj, view, rgb))
@@ -249,7 +260,7 @@ def main() -> None:
             "salient_threshold": salient.SALIENT_THRESHOLD,
             "auto_uniformity": segment.AUTO_UNIFORMITY,
             "refine_salient": segment.REFINE_SALIENT,
-            "segmenter": str(args.segmenter or "shipped"),
+            "segmenter": None if args.segmenter is None else str(args.segmenter),
             "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
             "refine_segmenter": segment.REFINE_SEGMENTER,
             "onnx_threads": salient.SESSION_THREADS,
