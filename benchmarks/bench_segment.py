@@ -214,7 +214,7 @@ def predictions(
     }
 
 
-def main() -> None:
+def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
     parser.add_argument("--composites", type=int, default=48)
@@ -223,7 +223,29 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
     parser.add_argument("--segmenter", type=Path, default=None, help="also measure this trained object segmenter")
     parser.add_argument("--fit-steps", type=int, default=30, help="predictions: fit to the photo (0 = off)")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
+    """The run's settings, as recorded with its results."""
+    return {
+        "data": str(args.data),
+        "composites": composites,
+        "seed": args.seed,
+        "canvas": CANVAS,
+        "backgrounds": BACKGROUNDS,
+        "salient_threshold": salient.SALIENT_THRESHOLD,
+        "auto_uniformity": segment.AUTO_UNIFORMITY,
+        "refine_salient": segment.REFINE_SALIENT,
+        "segmenter": None if args.segmenter is None else str(args.segmenter),
+        "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
+        "refine_segmenter": segment.REFINE_SEGMENTER,
+        "onnx_threads": salient.SESSION_THREADS,
+    }
+
+
+def main() -> None:
+    args = parse_args()
     rng = np.random.default_rng(args.seed)
     ds = Dataset.open(args.data)
     entries = ds.objects()
@@ -251,20 +273,7 @@ def main() -> None:
               + " ".join(f"{m}={v:.3f}" for m, v in iou.items()))  # fmt: skip
     result = {
         "benchmark": "segment_composites",
-        "settings": {
-            "data": str(args.data),
-            "composites": len(rows),
-            "seed": args.seed,
-            "canvas": CANVAS,
-            "backgrounds": BACKGROUNDS,
-            "salient_threshold": salient.SALIENT_THRESHOLD,
-            "auto_uniformity": segment.AUTO_UNIFORMITY,
-            "refine_salient": segment.REFINE_SALIENT,
-            "segmenter": None if args.segmenter is None else str(args.segmenter),
-            "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
-            "refine_segmenter": segment.REFINE_SEGMENTER,
-            "onnx_threads": salient.SESSION_THREADS,
-        },  # fmt: skip
+        "settings": settings(args, len(rows)),
         "machine": describe_machine(),
         **summarise(rows),
         "composites": [{k: v for k, v in r.items() if not k.endswith("sweep")} for r in rows],
