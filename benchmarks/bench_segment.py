@@ -83,18 +83,31 @@ def timed(fn, *args) -> tuple[Any, float]:
     return out, time.perf_counter() - start
 
 
+def measure_map(
+    rgb: np.ndarray, truth: np.ndarray, name: str, probability: Any, threshold: float, iou: dict, secs: dict
+) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Score a per-pixel object probability (a function of the photo) as method ``name`` and, edges redrawn by
+    GrabCut, as ``name+grabcut refine``, into ``iou`` and ``secs``; returns the map, its mask and the threshold
+    sweep."""
+    prob, secs[name] = timed(probability, rgb)
+    sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
+    mask, more = timed(segment.largest_component, prob > threshold)
+    secs[name] += more
+    iou[name] = segment.mask_iou(mask, truth)
+    refined, secs[f"{name}+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    secs[f"{name}+grabcut refine"] += secs[name]
+    iou[f"{name}+grabcut refine"] = segment.mask_iou(refined, truth)
+    return prob, mask, sweep
+
+
 def measure_segmenter(rgb: np.ndarray, truth: np.ndarray, segmenter, path: Path) -> tuple[dict, dict, dict]:
     """IoU and seconds of a trained object segmenter on one composite (alone, with GrabCut's edges, and as ``auto
     --segmenter``), its threshold sweep and its confidence."""
     iou, secs = {}, {}
-    prob, secs["segmenter"] = timed(segnet.object_probability, segmenter, rgb)
-    sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
-    mask, more = timed(segment.largest_component, prob > segnet.SEGMENTER_THRESHOLD)
-    secs["segmenter"] += more
-    iou["segmenter"] = segment.mask_iou(mask, truth)
-    refined, secs["segmenter+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
-    secs["segmenter+grabcut refine"] += secs["segmenter"]
-    iou["segmenter+grabcut refine"] = segment.mask_iou(refined, truth)
+    prob, mask, sweep = measure_map(
+        rgb, truth, "segmenter", lambda x: segnet.object_probability(segmenter, x), segnet.SEGMENTER_THRESHOLD, iou,
+        secs,
+    )  # fmt: skip
     seg, secs["auto --segmenter"] = timed(segment.segment, rgb, "auto", "composite", path)
     iou["auto --segmenter"] = segment.mask_iou(seg.mask, truth)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
@@ -109,14 +122,7 @@ def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, 
     iou["uniform"] = segment.mask_iou(mask, truth)
     grabcut, secs["grabcut"] = timed(segment.grabcut_mask, rgb)
     iou["grabcut"] = segment.mask_iou(grabcut, truth)
-    sal, secs["salient"] = timed(model.saliency, rgb)
-    sweep = {t: segment.mask_iou(segment.largest_component(sal > t), truth) for t in THRESHOLDS}
-    salient_only, more = timed(segment.largest_component, sal > salient.SALIENT_THRESHOLD)
-    secs["salient"] += more
-    iou["salient"] = segment.mask_iou(salient_only, truth)
-    refined, secs["salient+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, salient_only)
-    secs["salient+grabcut refine"] += secs["salient"]
-    iou["salient+grabcut refine"] = segment.mask_iou(refined, truth)
+    _, salient_only, sweep = measure_map(rgb, truth, "salient", model.saliency, salient.SALIENT_THRESHOLD, iou, secs)
     seg, secs["auto"] = timed(segment.segment, rgb, "auto")
     iou["auto"] = segment.mask_iou(seg.mask, truth)
     extra = {
