@@ -14,8 +14,8 @@ Run::
     affnerf data generate --out /tmp/w/data --objects-per-category 80 --views 30 --seed 0
     .venv/bin/python benchmarks/photo_conditions.py --data /tmp/w/data [--objects 2] [--categories a,b]
 
-Writes ``benchmarks/results/photo_conditions.json`` (``--out``); ``--merge A.json B.json`` joins the outputs of
-runs over disjoint categories (two processes side by side) into one table, ``photo_conditions.md``.
+Writes ``benchmarks/results/photo_conditions.json`` (``--out``) and its table beside it (``.md``); ``--merge A.json
+B.json`` joins the outputs of runs over disjoint categories (two processes side by side) into one.
 """
 
 from __future__ import annotations
@@ -152,8 +152,7 @@ def main() -> None:
         result = run(args)
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     text = table(result["rows"])
-    if args.merge:
-        args.out.with_suffix(".md").write_text(text + "\n")
+    args.out.with_suffix(".md").write_text(text + "\n")
     print(text)
     print(f"-> {args.out}")
 

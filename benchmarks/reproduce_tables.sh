@@ -80,6 +80,8 @@ $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf,retrie
 $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf-fit --out "$E" $EVAL
 .venv/bin/python benchmarks/inversion_sweep.py --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$R"
 .venv/bin/python benchmarks/fit_camera_accuracy.py --data "$W/data" --out "$R/fit_camera_accuracy.json"
+# what lighting and camera quality cost a prediction (the shipped model, 2 test objects per category)
+.venv/bin/python benchmarks/photo_conditions.py --data "$W/data" --out "$R/photo_conditions.json"
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --out "$E" $EVAL
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --input-views 3 --out "$E" $EVAL
 
