@@ -183,19 +183,34 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
     return out
 
 
+def score_photo(predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int, truth) -> dict:
+    """The prediction from ``photo`` (fitted to it for ``fit_steps`` first, as ``affnerf predict`` does; 0 = the
+    encoders' codes): its affordance mIoU at the object's ``targets`` views and its F@1cm against ``truth`` (the
+    object's :func:`affnerf.eval.surface.true_samples`)."""
+    from affnerf.eval.surface import sample_seed, score_mesh
+    from affnerf.metrics.segmentation import confusion_matrix, mean_iou
+    from affnerf.predict.invert import InversionConfig
+
+    enc = predictor.encode_image(photo)
+    if fit_steps > 0:
+        predictor.fit(enc, InversionConfig(steps=fit_steps))
+    n = len(predictor.classes)
+    conf = sum(confusion_matrix(obj.affordance(i), predictor.render(enc, obj.record.intrinsics, obj.pose(i)).labels, n)
+               for i in targets)  # fmt: skip
+    surf = score_mesh(predictor.mesh(enc, 96), truth, sample_seed(0, obj.record.object_id))
+    return {"miou": mean_iou(conf), "fscore_1cm": surf["fscore_1cm"] if surf else 0.0}
+
+
 def predictions(
     checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]], tmp: Path, fit_steps: int
 ) -> dict[str, Any]:
-    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render (each
-    fitted to its photo for ``fit_steps`` first, as ``affnerf predict`` does; 0 = the encoders' codes)."""
-    from affnerf.eval.surface import sample_seed, score_mesh, true_samples
-    from affnerf.metrics.segmentation import confusion_matrix, mean_iou
-    from affnerf.predict.invert import InversionConfig
+    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render
+    (:func:`score_photo`)."""
+    from affnerf.eval.surface import true_samples
     from affnerf.predict.predictor import Predictor
     from affnerf.predict.shipped import shipped_model
 
     predictor = Predictor.load(Path(shipped_model() if checkpoint == "shipped" else checkpoint), "auto")
-    n = len(predictor.classes)
     scores: dict[str, dict[str, list[float]]] = {k: {"miou": [], "fscore_1cm": []} for k in ("composite", "clean")}
     for k, (obj, view, comp) in enumerate(cases):
         paths = {"composite": tmp / f"c{k}.png", "clean": tmp / f"r{k}.png"}
@@ -204,14 +219,8 @@ def predictions(
         others = [i for i in range(len(obj.record.frames)) if i != view]
         truth = true_samples(obj, 0)
         for kind, path in paths.items():
-            enc = predictor.encode_image(path)
-            if fit_steps > 0:
-                predictor.fit(enc, InversionConfig(steps=fit_steps))
-            conf = sum(confusion_matrix(obj.affordance(i), predictor.render(enc, obj.record.intrinsics,
-                                        obj.pose(i)).labels, n) for i in others)  # fmt: skip
-            scores[kind]["miou"].append(mean_iou(conf))
-            surf = score_mesh(predictor.mesh(enc, 96), truth, sample_seed(0, obj.record.object_id))
-            scores[kind]["fscore_1cm"].append(surf["fscore_1cm"] if surf else 0.0)
+            for metric, value in score_photo(predictor, obj, path, others, fit_steps, truth).items():
+                scores[kind][metric].append(value)
     return {
         "checkpoint": checkpoint,
         "fit_steps": fit_steps,
@@ -245,7 +254,6 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "refine_salient": segment.REFINE_SALIENT,
         "segmenter": None if args.segmenter is None else str(args.segmenter),
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
-        "refine_segmenter": segment.REFINE_SEGMENTER,
         "onnx_threads": salient.SESSION_THREADS,
     }
 

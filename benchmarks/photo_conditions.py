@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -32,13 +33,14 @@ import numpy as np
 from PIL import Image, ImageFilter
 
 from affnerf.bench.environment import describe_machine
-from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.dataset import Dataset
 from affnerf.eval.protocol import ProtocolConfig, choose_views
-from affnerf.eval.surface import sample_seed, score_mesh, true_samples
-from affnerf.metrics.segmentation import confusion_matrix, mean_iou
-from affnerf.predict.invert import InversionConfig
+from affnerf.eval.surface import sample_seed, true_samples
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
+
+sys.path.insert(0, str(Path(__file__).parent))
+from bench_segment import score_photo  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 
@@ -80,20 +82,6 @@ CONDITIONS = {
 }
 
 
-def score(predictor: Predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int) -> dict[str, float]:
-    """mIoU at the target views and F@1cm of the prediction from ``photo`` (fitted for ``fit_steps``)."""
-    enc = predictor.encode_image(photo)
-    if fit_steps > 0:
-        predictor.fit(enc, InversionConfig(steps=fit_steps))
-    n = len(predictor.classes)
-    conf = sum(
-        confusion_matrix(obj.affordance(i), predictor.render(enc, obj.record.intrinsics, obj.pose(i)).labels, n)
-        for i in targets
-    )
-    surf = score_mesh(predictor.mesh(enc, 96), true_samples(obj, 0), sample_seed(0, obj.record.object_id))
-    return {"miou": mean_iou(conf), "fscore_1cm": surf["fscore_1cm"] if surf else 0.0}
-
-
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Predict every chosen object under every condition; the per-object scores and the run's settings."""
     ds = Dataset.open(args.data)
@@ -106,11 +94,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                 obj = ds.load_object(entry)
                 (view,), targets = choose_views(len(obj), obj.record.object_id, protocol)
                 rng = np.random.default_rng(sample_seed(0, obj.record.object_id))
+                truth = true_samples(obj, 0)  # once per object, for every condition
                 for name, change in CONDITIONS.items():
                     photo = Path(tmp) / "photo.png"
                     alpha = (obj.affordance(view) > 0).astype(np.uint8) * 255  # the true mask: lighting only
                     Image.fromarray(np.dstack([change(obj.rgb(view), rng), alpha])).save(photo)
-                    scores = score(predictor, obj, photo, targets, args.fit_steps)
+                    scores = score_photo(predictor, obj, photo, targets, args.fit_steps, truth)
                     rows.append({"object": obj.record.object_id, "category": category, "condition": name, **scores})
                     print(
                         f"{obj.record.object_id:16s} {name:36s} mIoU {scores['miou']:.3f} F {scores['fscore_1cm']:.3f}"

@@ -122,8 +122,6 @@ def trained_runs(train_dataset, tmp_path_factory) -> dict[str, Path]:
 @pytest.fixture(scope="session")
 def trained_segmenter(train_dataset, tmp_path_factory) -> Path:
     """An object segmenter trained for a few seconds on ``train_dataset``'s two training objects."""
-    import torch
-
     from affnerf.model.segmenter import SegmenterConfig
     from affnerf.train.segmenter import SegmenterTrainConfig, train_segmenter
 
@@ -132,6 +130,5 @@ def trained_segmenter(train_dataset, tmp_path_factory) -> Path:
         data=train_dataset, out=out, steps=120, batch=8, lr=5e-3, views_per_object=8, pool=96, val_photos=16,
         network=SegmenterConfig(base=8, levels=2, input_side=48),
     )  # fmt: skip
-    torch.manual_seed(0)
-    train_segmenter(cfg)
+    train_segmenter(cfg)  # seeded by cfg.seed
     return out

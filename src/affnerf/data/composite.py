@@ -55,7 +55,7 @@ def photo_library(exclude: tuple[str, ...] = HELD_OUT_BACKGROUNDS) -> list[np.nd
     folder = Path(skimage.data.__file__).parent
     photos = []
     for path in sorted(folder.glob("*.png")) + sorted(folder.glob("*.jpg")):
-        if path.stem in exclude or any(path.stem.startswith(e) for e in exclude):
+        if path.stem.startswith(tuple(exclude)):
             continue
         image = np.asarray(Image.open(path).convert("RGB"))
         if min(image.shape[:2]) >= 64:
@@ -152,8 +152,7 @@ def fragment(rng: np.random.Generator, cutout: Cutout) -> Cutout | None:
     fh, fw = max(2, round(h * rng.uniform(0.3, 0.7))), max(2, round(w * rng.uniform(0.3, 0.7)))
     y, x = rng.integers(0, h - fh + 1), rng.integers(0, w - fw + 1)
     window = (slice(y, y + fh), slice(x, x + fw))
-    piece = cut_to_box(cutout.rgb[window][..., rng.permutation(3)], cutout.mask[window])
-    return piece
+    return cut_to_box(cutout.rgb[window][..., rng.permutation(3)], cutout.mask[window])
 
 
 def training_photo(

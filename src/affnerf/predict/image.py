@@ -233,7 +233,8 @@ def prepare_image(
         segment: how to separate the object without a mask (:data:`affnerf.predict.segment.SEGMENT_METHODS`):
             ``auto`` (alpha, else a uniform background, else the salient model), ``salient``, ``grabcut``,
             ``uniform`` or ``none`` (the whole image is the object).
-        segmenter: the object segmenter file ``auto`` and ``segmenter`` use (default: the shipped one).
+        segmenter: an object segmenter file (``affnerf train-segmenter``) for ``segmenter``, and for ``auto``
+            before the salient model.
 
     Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), and when
     ``auto`` falls back because the optional salient model is not installed.

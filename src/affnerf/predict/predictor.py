@@ -128,8 +128,8 @@ class Predictor:
     def encode_image(
         self, image: Path, mask: Path | None = None, segment: SegmentMethod = "auto", segmenter: Path | None = None
     ) -> EncodedObject:
-        """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, with the object segmenter
-        file ``segmenter`` or the shipped one; crop, centre, resize) and encode it."""
+        """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, which may use the object
+        segmenter file ``segmenter``; crop, centre, resize) and encode it."""
         size = self.loaded.model.config.encoder_resolution
         prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment, segmenter)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)

@@ -5,7 +5,7 @@
 - ``segmenter``: an object segmenter trained on your own object families with ``affnerf train-segmenter``
   (:mod:`affnerf.model.segmenter`, given as a file), largest connected component. Its confidence is the mean
   probability it gives the pixels of its own mask; below :data:`MIN_SEGMENTER_CONFIDENCE` the separation is
-  doubtful. None ships: one trained for 70 minutes of 2 CPU cores on the procedural families found the object on
+  doubtful. None ships: one trained for 80 minutes of 2 CPU cores on the procedural families found the object on
   the composite benchmark's held-out photographs less often than GrabCut (``benchmarks/bench_segment.py``).
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
 - ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
@@ -62,10 +62,6 @@ MIN_AGREEMENT = 0.8
 #: Whether ``auto`` and ``salient`` redraw the salient mask's edges with GrabCut from its trimap: on the composite
 #: benchmark it raised the mean mask IoU from 0.483 to 0.490 (better in most composites) for about 0.25 s an image.
 REFINE_SALIENT = True
-#: Whether the object segmenter's mask has its edges redrawn by GrabCut from its trimap. With the one segmenter
-#: measured (trained 80 min on 2 cores, ``segment_composites.json``) it raised the benchmark's mean mask IoU from
-#: 0.366 to 0.413; off until a segmenter worth shipping is measured with it.
-REFINE_SEGMENTER = False
 #: Smallest mean probability of the segmenter over its own mask for a confident separation.
 MIN_SEGMENTER_CONFIDENCE = 0.8
 #: How to get an object segmenter (the words of the error when one is needed and not given).
@@ -244,12 +240,11 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
 
 def segmenter_segmentation(rgb: np.ndarray, model) -> Segmentation:
     """The object segmenter's mask (probability above :data:`~affnerf.model.segmenter.SEGMENTER_THRESHOLD`, largest
-    component; edges redrawn by GrabCut when ``REFINE_SEGMENTER`` and OpenCV is there) and its confidence, the
-    mean probability over the mask (0 when the mask is empty)."""
+    component) and its confidence, the mean probability over the mask (0 when the mask is empty). GrabCut's edges
+    are not drawn on it: ``bench_segment.py`` measures them (0.366 → 0.413 mean mask IoU with the one segmenter
+    trained), to be switched on with a segmenter worth shipping."""
     prob = object_probability(model, rgb)
     mask = largest_component(prob > SEGMENTER_THRESHOLD)
-    if REFINE_SEGMENTER and mask.any() and opencv() is not None:
-        mask = refine_with_grabcut(rgb, mask)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
     return Segmentation(mask, "segmenter", confidence=confidence)
 

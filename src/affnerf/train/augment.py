@@ -92,6 +92,16 @@ def gaussian_blur(images: torch.Tensor, sigma: torch.Tensor, taps: int = 5) -> t
     return x.reshape(n, c, h, w)
 
 
+def blur_and_noise(images: torch.Tensor, strength: float, g: torch.Generator) -> torch.Tensor:
+    """(N, 3, H, W) images in [0, 1] blurred (sigma U(0, 1.2s) px on half of them) then noised (Gaussian, sigma
+    U(0, 0.03s)), clamped to [0, 1]."""
+    n = images.shape[0]
+    sigma = torch.rand(n, generator=g) * 1.2 * strength * (torch.rand(n, generator=g) < 0.5)
+    x = gaussian_blur(images, sigma)
+    noise = torch.randn(x.shape, generator=g) * (torch.rand(n, generator=g) * 0.03 * strength)[:, None, None, None]
+    return (x + noise.to(x)).clamp(0.0, 1.0)
+
+
 def jitter_crops(
     images: torch.Tensor, intrinsics: torch.Tensor, background: torch.Tensor, strength: float, g: torch.Generator
 ) -> tuple[torch.Tensor, torch.Tensor]:
@@ -112,8 +122,5 @@ def jitter_crops(
     bg = background.to(x).repeat_interleave(v, dim=0)
     x = jitter_colour(x, object_mask(x, bg), strength, g)
     x, k = jitter_framing(x, intrinsics.reshape(b * v, 4), bg, strength, g)
-    sigma = torch.rand(b * v, generator=g) * 1.2 * strength * (torch.rand(b * v, generator=g) < 0.5)
-    x = gaussian_blur(x, sigma)
-    noise = torch.randn(x.shape, generator=g) * (torch.rand(b * v, generator=g) * 0.03 * strength)[:, None, None, None]
-    x = (x + noise.to(x)).clamp(0.0, 1.0)
+    x = blur_and_noise(x, strength, g)
     return x.reshape(images.shape), k.reshape(b, v, 4)

@@ -26,7 +26,7 @@ from affnerf.data.composite import Cutout, cut_to_box, photo_library, training_p
 from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import ObjectSegmenter, SegmenterConfig, read_segmenter, save_segmenter
-from affnerf.train.augment import gaussian_blur, jitter_colour
+from affnerf.train.augment import blur_and_noise, jitter_colour
 
 logger = logging.getLogger(__name__)
 
@@ -103,11 +103,8 @@ def augment_batch(
     x[flip], m[flip] = x[flip].flip(-1), m[flip].flip(-1)
     if strength > 0:
         x = jitter_colour(x, torch.ones_like(m), strength, g)
-        x = jitter_colour(x, m, strength, g)
-        n = x.shape[0]
-        x = gaussian_blur(x, torch.rand(n, generator=g) * 1.2 * strength * (torch.rand(n, generator=g) < 0.5))
-        x = x + torch.randn(x.shape, generator=g) * (torch.rand(n, generator=g) * 0.03 * strength)[:, None, None, None]
-    return x.clamp(0.0, 1.0), m
+        x = blur_and_noise(jitter_colour(x, m, strength, g), strength, g)
+    return x, m
 
 
 def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
