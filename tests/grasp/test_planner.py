@@ -11,7 +11,7 @@ import trimesh
 
 from affnerf.cli.main import main
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PlanConfig, collides, plan_grasps, sample_antipodal, shrink_part
+from affnerf.grasp.planner import PlanConfig, collides, part_masks, plan_grasps, sample_antipodal, shrink_part
 from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import LabelledMesh, write_labelled_ply
@@ -90,6 +90,32 @@ def test_a_margin_that_leaves_only_ungraspable_surface_falls_back_to_the_whole_p
     assert shrunk[:, 0].min() > 0.3  # only the block is 0.1 from the body: it is wider than any opening
     grasps = plan_grasps(obj, config)
     assert grasps and all(np.all(g.contacts[:, 0] < 0.1) for g in grasps)  # on the bar, as without a margin
+
+
+def test_restricted_grasps_go_first_where_a_second_prediction_confirms_the_part(screwdriver):
+    handle = screwdriver.face_affordance == AFFORDANCE_CLASSES.index("grasp")
+    centre_x = screwdriver.vertices[screwdriver.faces].mean(axis=1)[:, 0]
+    agrees = handle & (centre_x < -0.15)  # the handle spans x in [-0.22, -0.056]: its far end is confirmed
+    obj = GraspObject(screwdriver.vertices, screwdriver.faces, screwdriver.face_affordance, "screwdriver", agrees)
+    config = PlanConfig(affordance="grasp", num=8, refine=RefineConfig(steps=0), part_margin=0.0)
+    grasps = plan_grasps(obj, config)
+    assert grasps and all(g.affordance == ["grasp", "grasp"] for g in grasps)
+    assert max(g.contacts[:, 0].max() for g in grasps) < -0.15 + 0.005  # faces are kept by their centroid
+    unconfirmed = plan_grasps(screwdriver, config)
+    assert max(g.contacts[:, 0].max() for g in unconfirmed) > -0.15
+
+
+def test_a_confirmed_patch_without_grasps_falls_back_to_the_whole_part(screwdriver):
+    handle = screwdriver.face_affordance == AFFORDANCE_CLASSES.index("grasp")
+    agrees = np.zeros_like(handle)
+    agrees[np.flatnonzero(handle)[:2]] = True  # two faces: no antipodal pair lies on them
+    obj = GraspObject(screwdriver.vertices, screwdriver.faces, screwdriver.face_affordance, "screwdriver", agrees)
+    masks = part_masks(obj, handle, 0.01)
+    assert np.array_equal(masks[0], agrees) and np.array_equal(masks[-1], handle)
+    assert all(not (m & ~handle).any() for m in masks)
+    assert not any(np.array_equal(a, b) for i, a in enumerate(masks) for b in masks[i + 1 :])  # none planned twice
+    grasps = plan_grasps(obj, PlanConfig(affordance="grasp", num=4, refine=RefineConfig(steps=0)))
+    assert grasps and all(g.affordance == ["grasp", "grasp"] for g in grasps)
 
 
 def test_planned_grasps_are_valid_and_collision_free(screwdriver):

@@ -60,6 +60,8 @@ def test_predict_writes_every_output(trained_runs, photo, tmp_path, capsys, kind
     assert summary["object_separated_by"] == ("alpha" if kind == "rgba" else "uniform background")
     mesh = read_labelled_ply(out / "affordance_model.ply")
     assert len(mesh.faces) > 0 and "affordance" in mesh.vertex_props and mesh.vertex_colors is not None
+    confirmed = mesh.face_props["confirmed"]  # fitted (the default): where the encoders' codes agree
+    assert confirmed.shape == (len(mesh.faces),) and set(np.unique(confirmed)) <= {0, 1}
     assert set(summary["surface_area_m2"]) == set(summary["classes_present"]) and summary["classes_present"]
     assert (out / "affordance_model.glb").stat().st_size > 0
     fit = summary["fit"]  # test-time inversion is on by default

@@ -31,6 +31,7 @@ from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import read_labelled_ply
 from affnerf.model.inputs import dataset_views
+from affnerf.predict.agreement import AGREEMENT_DISTANCE, confirmed
 from affnerf.predict.invert import InversionConfig, dataset_crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_mesh
@@ -68,6 +69,9 @@ class GraspEvalConfig:
             surface of other labels (:class:`~affnerf.grasp.planner.PlanConfig`).
         fit_steps: steps of test-time inversion of the predicted models to their input view (as ``affnerf
             predict``; :mod:`affnerf.predict.invert`); 0 = the encoder's codes.
+        agreement_distance: with ``fit_steps``, the task part is planned first on the faces the encoder's own
+            prediction confirms (same label within this distance, canonical frame;
+            :func:`~affnerf.predict.agreement.agreeing_faces`); 0 = off.
     """
 
     run: Path
@@ -89,6 +93,7 @@ class GraspEvalConfig:
     pictures: bool = True
     part_margin: float = PART_MARGIN
     fit_steps: int = 30
+    agreement_distance: float = AGREEMENT_DISTANCE
 
 
 def predicted_object(
@@ -98,17 +103,22 @@ def predicted_object(
     resolution: int,
     level: float | None = None,
     fit_steps: int = 0,
+    agreement_distance: float = 0.0,
 ) -> GraspObject:
     """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh (with
-    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none)."""
+    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none). With both,
+    its ``face_agrees`` marks the faces the encoder's codes' own mesh confirms within ``agreement_distance``."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
     encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
+    first = encoding
     if fit_steps > 0:
         target = dataset_crop_target(obj, view, model.config.encoder_resolution)
         config = InversionConfig(steps=fit_steps, seed=view)
         encoding = invert(model, encoding, target, np.asarray(loaded.background), config).codes
     mesh = model_mesh(model, encoding, resolution, level, model.occupancy(encoding))
+    if fit_steps > 0 and agreement_distance > 0:
+        mesh = confirmed(mesh, model_mesh(model, first, resolution, level, model.occupancy(first)), agreement_distance)
     return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
 
 
@@ -189,7 +199,10 @@ def evaluate_object(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
     predicted = scaled(
-        predicted_object(loaded, obj, view, config.resolution, config.level, config.fit_steps), size.factor
+        predicted_object(
+            loaded, obj, view, config.resolution, config.level, config.fit_steps, config.agreement_distance
+        ),
+        size.factor,
     )
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(num=config.num, seed=config.seed, part_margin=config.part_margin)

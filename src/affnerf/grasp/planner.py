@@ -210,19 +210,34 @@ def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, ang
     return kept
 
 
+def part_masks(obj: GraspObject, part: np.ndarray, margin: float) -> list[np.ndarray]:
+    """The (F,) bool surfaces a restricted grasp is planned on, in turn until one yields grasps: where the object
+    has a second prediction (``obj.face_agrees``), the faces of ``part`` it confirms, shrunk by ``margin``
+    (:func:`shrink_part`), then whole; then ``part`` shrunk, then whole. A repeated mask is left out.
+    """
+    tried: list[np.ndarray] = []
+    agreed = part & obj.face_agrees if obj.face_agrees is not None else None
+    for base in ([agreed] if agreed is not None and agreed.any() else []) + [part]:
+        for mask in (shrink_part(obj.vertices, obj.faces, base, margin), base):
+            if not any(np.array_equal(mask, t) for t in tried):
+                tried.append(mask)
+    return tried
+
+
 def plan_grasps(
     obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()
 ) -> list[Grasp]:
-    """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). With a part
-    margin, on the part shrunk by it; when nothing there survives, on the whole part."""
+    """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). Restricted to a
+    part, on the first of :func:`part_masks` where any survive (the part confirmed by a second prediction, the
+    part shrunk by the margin, the whole part)."""
     part = allowed_faces(obj, config.affordance)
     if part is None:
         return _plan_on(obj, None, config, gripper)
-    shrunk = shrink_part(obj.vertices, obj.faces, part, config.part_margin)
-    grasps = _plan_on(obj, shrunk, config, gripper)
-    if grasps or np.array_equal(shrunk, part):
-        return grasps
-    return _plan_on(obj, part, config, gripper)
+    for mask in part_masks(obj, part, config.part_margin):
+        grasps = _plan_on(obj, mask, config, gripper)
+        if grasps:
+            return grasps
+    return []
 
 
 def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, gripper: ParallelJawGripper) -> list[Grasp]:

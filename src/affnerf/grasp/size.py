@@ -130,8 +130,9 @@ def resolve_size(mesh_path: Path, vertices: np.ndarray, object_size: float | Non
 
 
 def scaled(obj: GraspObject, factor: float) -> GraspObject:
-    """The object with vertices (V, 3) multiplied by ``factor`` about the origin (labels and name kept)."""
-    return GraspObject(obj.vertices * factor, obj.faces, obj.face_affordance, obj.name)
+    """The object with vertices (V, 3) multiplied by ``factor`` about the origin (labels, agreement and name
+    kept)."""
+    return GraspObject(obj.vertices * factor, obj.faces, obj.face_affordance, obj.name, obj.face_agrees)
 
 
 def rescale_poses(poses: np.ndarray, factor: float) -> np.ndarray:

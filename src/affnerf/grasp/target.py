@@ -25,25 +25,32 @@ class GraspObject:
         faces: (F, 3).
         face_affordance: (F,) affordance ids, or None when the mesh carries no labels.
         name: where it came from (for messages).
+        face_agrees: (F,) bool faces whose label a second prediction of the object confirms (the mesh's face
+            property ``confirmed``, :func:`affnerf.predict.agreement.confirmed`; a task part is planned on those
+            first), or None.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     face_affordance: np.ndarray | None = None
     name: str = "mesh"
+    face_agrees: np.ndarray | None = None
     _caster: RayCaster | None = field(default=None, repr=False)
 
     @classmethod
     def from_mesh(cls, mesh: LabelledMesh, name: str = "mesh") -> GraspObject:
-        """From a labelled mesh: per-face ``affordance`` if present, else the majority of its vertices'."""
+        """From a labelled mesh: per-face ``affordance`` if present, else the majority of its vertices'; the face
+        property ``confirmed``, when present, as :attr:`face_agrees`."""
         labels = mesh.face_props.get("affordance")
         if labels is None and "affordance" in mesh.vertex_props:
             labels = majority_face_labels(mesh.faces, np.asarray(mesh.vertex_props["affordance"]))
+        agrees = mesh.face_props.get("confirmed")
         return cls(
             np.asarray(mesh.vertices, np.float64),
             np.asarray(mesh.faces, np.int64),
             None if labels is None else np.asarray(labels, np.int64),
             name,
+            None if agrees is None else np.asarray(agrees) > 0,
         )
 
     @property

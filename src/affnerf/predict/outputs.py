@@ -230,6 +230,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     mesh, level = predictor.surface(obj, config.resolution, config.level)
     fit, check = None, None
     if obj.inversion is not None:
+        mesh = predictor.confirm(obj, mesh, config.resolution, config.level)
         fit = fit_record(obj.inversion, config.fit_steps, math.degrees(obj.crop_camera.camera_angle_x))
         check = fit_picture(predictor, obj)
     out = Path(config.out)

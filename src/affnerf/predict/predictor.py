@@ -25,6 +25,7 @@ from affnerf.meshio import LabelledMesh
 from affnerf.model.affnerf import Codes
 from affnerf.model.config import RAYS_PER_CHUNK
 from affnerf.model.views import RenderedView, render_view
+from affnerf.predict.agreement import confirmed
 from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.invert import InversionConfig, InversionResult, crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
@@ -36,14 +37,16 @@ from affnerf.rendering.grid import OccupancyGrid
 @dataclass
 class EncodedObject:
     """An object seen in one image: its codes, how its image was prepared, (once built) its occupancy grid, and
-    (once fitted to its image) how the fit went and the intrinsics of the crop it was fitted in (with
-    ``inversion.camera``, the camera of the encoders' crop in the canonical frame)."""
+    (once fitted to its image) how the fit went, the intrinsics of the crop it was fitted in (with
+    ``inversion.camera``, the camera of the encoders' crop in the canonical frame) and the encoders' codes before
+    the fit."""
 
     codes: Codes
     prepared: PreparedImage | None = None
     grid: OccupancyGrid | None = None
     inversion: InversionResult | None = None
     crop_camera: Intrinsics | None = None
+    encoder_codes: Codes | None = None
 
 
 def turntable_poses(count: int, elevation_deg: float = 25.0, radius: float = 0.75) -> np.ndarray:
@@ -154,6 +157,8 @@ class Predictor:
         size = self.loaded.model.config.encoder_resolution
         target = crop_target(obj.prepared.rgb, mask, k, size, self.loaded.background)
         result = invert(self.loaded.model, obj.codes, target, np.asarray(self.loaded.background), config)
+        if obj.encoder_codes is None:
+            obj.encoder_codes = obj.codes
         obj.codes, obj.grid, obj.inversion = result.codes, None, result
         obj.crop_camera = Intrinsics(size, size, *(float(v) for v in target.intrinsics))
         return result
@@ -177,6 +182,18 @@ class Predictor:
         at: ``level`` when given, else the object's own level (:func:`affnerf.predict.level.object_level`)."""
         grid = self.grid(obj) if self.fast else None
         return model_surface(self.loaded.model, obj.codes, resolution, level, grid)
+
+    def confirm(
+        self, obj: EncodedObject, mesh: LabelledMesh, resolution: int = 128, level: float | None = None
+    ) -> LabelledMesh:
+        """``mesh`` of a fitted object with the face property ``confirmed``: where the encoders' codes before the
+        fit put the same label within :data:`~affnerf.predict.agreement.AGREEMENT_DISTANCE`
+        (:func:`affnerf.predict.agreement.confirmed`). An object never fitted gets ``mesh`` back unchanged."""
+        if obj.encoder_codes is None:
+            return mesh
+        model = self.loaded.model
+        grid = model.occupancy(obj.encoder_codes, self.grid_resolution, self.grid_threshold) if self.fast else None
+        return confirmed(mesh, model_surface(model, obj.encoder_codes, resolution, level, grid)[0])
 
     def mesh(self, obj: EncodedObject, resolution: int = 128, level: float | None = None) -> LabelledMesh:
         """The labelled mesh of :meth:`surface`."""
