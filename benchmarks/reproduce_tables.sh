@@ -137,8 +137,9 @@ done
 # 7. Table 3 as a 2x2 (true or predicted mesh x whole surface or task part), 5 test objects of each of the 8 categories,
 #    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
 #    default 1 cm part margin (chosen on validation objects by
-#    benchmarks/grasp_margin.py); about 10 minutes on one core (committed run: the two halves of the categories side
-#    by side, 6 min 36 s, merged; every object is evaluated on its own, so it equals this one command)
+#    benchmarks/grasp_margin.py), the predicted part planned first where the prediction before the fit agrees;
+#    about 10 minutes on one core (committed run: the two halves of the categories side by side, 6 min 28 s,
+#    merged by benchmarks/merge_grasps.py; every object is evaluated on its own, so it equals this one command)
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
 # 8. collect
