@@ -2,25 +2,29 @@
 # Is the small preset short of capacity? (benchmarks/results/capacity.md, issue 12). The shipped model plateaus
 # (second_stage.md: a third stage at 100x75 or 200x150 adds nothing) while it still fits its own training objects
 # poorly, and test-time fits from training objects' codes are no sharper (test_time_variants.md): the decoder looks
-# like the limit. Side by side, one core each, the same minutes and the same 17,000-step schedule (as
-# code_size.sh): the small preset against a field twice as wide (128, colour and affordance heads 64); every
-# checkpoint scored on the ladder's 16 validation objects.
+# like the limit. Side by side, one core each, the same minutes: the small preset against a field twice as wide
+# (128, colour and affordance heads 64), each with a schedule that ends when the minutes do (SMALL_STEPS and
+# WIDE_STEPS: measured here side by side, 9.4 and 4.3 steps a second); every checkpoint scored on the ladder's
+# 16 validation objects.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
 W="${WORK:-benchmarks/.work/capacity}"
 MINUTES="${MINUTES:-35}"
 export OMP_NUM_THREADS=1
+SMALL_STEPS="${SMALL_STEPS:-19000}"
+WIDE_STEPS="${WIDE_STEPS:-9000}"
 run() {
-    name=$1; shift
-    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/$name" --config small --steps 17000 \
-        --time-limit "$MINUTES" --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 \
+    name=$1; steps=$2; shift 2
+    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/$name" --config small --steps "$steps" \
+        --time-limit "$((MINUTES + 1))" --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 \
         --cache-dir "$W/cache" --no-progress "$@"
 }
 # build the frame and point cache before either run is timed
+rm -rf "$W/warm"
 .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
     --val-every 0 --cache-dir "$W/cache" --no-progress
-run small & run wide --model.field-width 128 --model.color-width 64 --model.affordance-width 64 & wait
+run small "$SMALL_STEPS" & run wide "$WIDE_STEPS" --model.field-width 128 --model.color-width 64 --model.affordance-width 64 & wait
 for n in small wide; do
     .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$n.json" \
         --score-run "$W/$n" &
