@@ -106,8 +106,9 @@ def predicted_object(
     agreement_distance: float = 0.0,
 ) -> GraspObject:
     """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh (with
-    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none). With both,
-    its ``face_agrees`` marks the faces the encoder's codes' own mesh confirms within ``agreement_distance``."""
+    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none). With both
+    and ``agreement_distance`` > 0, the mesh's faces carry ``confirmed`` (:func:`affnerf.predict.agreement.confirmed`
+    against the encoder's codes' own mesh), read as the object's ``face_agrees``."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
     encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))

@@ -65,7 +65,7 @@ def confirmed(mesh: LabelledMesh, other: LabelledMesh, distance: float = AGREEME
         mesh.face_props["affordance"],
         other.vertices,
         other.faces,
-        other.face_props.get("affordance", np.zeros(len(other.faces), np.int64)),
+        other.face_props["affordance"],
         distance,
     )
     return replace(mesh, face_props={**mesh.face_props, "confirmed": agrees.astype(np.uint8)})

@@ -191,9 +191,7 @@ class Predictor:
         (:func:`affnerf.predict.agreement.confirmed`). An object never fitted gets ``mesh`` back unchanged."""
         if obj.encoder_codes is None:
             return mesh
-        model = self.loaded.model
-        grid = model.occupancy(obj.encoder_codes, self.grid_resolution, self.grid_threshold) if self.fast else None
-        return confirmed(mesh, model_surface(model, obj.encoder_codes, resolution, level, grid)[0])
+        return confirmed(mesh, self.surface(EncodedObject(obj.encoder_codes), resolution, level)[0])
 
     def mesh(self, obj: EncodedObject, resolution: int = 128, level: float | None = None) -> LabelledMesh:
         """The labelled mesh of :meth:`surface`."""
