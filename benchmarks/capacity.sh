@@ -14,17 +14,17 @@ MINUTES="${MINUTES:-35}"
 export OMP_NUM_THREADS=1
 SMALL_STEPS="${SMALL_STEPS:-19000}"
 WIDE_STEPS="${WIDE_STEPS:-9000}"
-run() {
-    name=$1; steps=$2; shift 2
-    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/$name" --config small --steps "$steps" \
-        --time-limit "$((MINUTES + 1))" --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 \
-        --cache-dir "$W/cache" --no-progress "$@"
-}
+LIMIT="$((MINUTES + 1))"
+# shellcheck source=benchmarks/side_by_side.sh
+source benchmarks/side_by_side.sh
 # build the frame and point cache before either run is timed
 rm -rf "$W/warm"
 .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
     --val-every 0 --cache-dir "$W/cache" --no-progress
-run small "$SMALL_STEPS" & run wide "$WIDE_STEPS" --model.field-width 128 --model.color-width 64 --model.affordance-width 64 & wait
+timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache" &
+timed_small_run wide "$WIDE_STEPS" --cache-dir "$W/cache" --model.field-width 128 --model.color-width 64 \
+    --model.affordance-width 64 &
+wait
 for n in small wide; do
     .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$n.json" \
         --score-run "$W/$n" &

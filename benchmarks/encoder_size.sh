@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Is the encoders' input the limit? (benchmarks/results/encoder_size.md, issue 12). The small preset's encoders see a
+# 64-pixel crop at a quarter of ResNet18's width; neither was ever varied (the preset search varied the field, and
+# neither a wider field, wide_full_budget.md, nor a larger code, code_size.md, paid). Side by side, one core each,
+# the same minutes: the small preset against encoders on 96-pixel crops, each with a schedule that ends when the
+# minutes do (SMALL_STEPS, CROP_STEPS: 10,000 each, at the 9.4 and 9.0 steps a second measured here side by side);
+# every checkpoint scored on the ladder's 16 validation objects.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
+W="${WORK:-benchmarks/.work/encoder_size}"
+MINUTES="${MINUTES:-22}"
+export OMP_NUM_THREADS=1
+SMALL_STEPS="${SMALL_STEPS:-10000}"
+CROP_STEPS="${CROP_STEPS:-10000}"
+CROP="--model.encoder-resolution 96"
+LIMIT="$MINUTES"
+# shellcheck source=benchmarks/side_by_side.sh
+source benchmarks/side_by_side.sh
+# build both frame caches (the crops depend on the encoder's resolution) before either run is timed
+for c in small:"" crop96:"$CROP"; do
+    rm -rf "$W/warm"
+    # shellcheck disable=SC2086
+    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
+        --val-every 0 --cache-dir "$W/cache_${c%%:*}" --no-progress ${c#*:}
+done
+timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache_small" &
+# shellcheck disable=SC2086
+timed_small_run crop96 "$CROP_STEPS" --cache-dir "$W/cache_crop96" $CROP &
+wait
+for n in small crop96; do
+    .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$n.json" \
+        --score-run "$W/$n" &
+done
+wait

@@ -1,0 +1,13 @@
+# Sourced by the benchmarks that train two `small` runs side by side, one core each, for the same minutes
+# (capacity.sh, encoder_size.sh). Needs DATA, W and LIMIT (the run's time limit in minutes).
+# shellcheck shell=bash
+
+# timed_small_run NAME STEPS [TRAIN OPTIONS...]: train W/NAME for STEPS steps (its schedule's length) or LIMIT
+# minutes, whichever ends first, keeping a checkpoint every 1,000 steps for benchmarks/ablation_ladder.py.
+timed_small_run() {
+    local name=$1 steps=$2
+    shift 2
+    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/$name" --config small --steps "$steps" \
+        --time-limit "$LIMIT" --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 \
+        --no-progress "$@"
+}
