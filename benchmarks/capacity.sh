@@ -25,8 +25,4 @@ timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache" &
 timed_small_run wide "$WIDE_STEPS" --cache-dir "$W/cache" --model.field-width 128 --model.color-width 64 \
     --model.affordance-width 64 &
 wait
-for n in small wide; do
-    .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$n.json" \
-        --score-run "$W/$n" &
-done
-wait
+score_runs small wide

@@ -28,8 +28,4 @@ timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache_small" &
 # shellcheck disable=SC2086
 timed_small_run crop96 "$CROP_STEPS" --cache-dir "$W/cache_crop96" $CROP &
 wait
-for n in small crop96; do
-    .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$n.json" \
-        --score-run "$W/$n" &
-done
-wait
+score_runs small crop96

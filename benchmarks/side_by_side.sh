@@ -1,5 +1,5 @@
 # Sourced by the benchmarks that train two `small` runs side by side, one core each, for the same minutes
-# (capacity.sh, encoder_size.sh). Needs DATA, W and LIMIT (the run's time limit in minutes).
+# (capacity.sh, encoder_size.sh), and score them. Needs DATA, W and LIMIT (a run's time limit in minutes).
 # shellcheck shell=bash
 
 # timed_small_run NAME STEPS [TRAIN OPTIONS...]: train W/NAME for STEPS steps (its schedule's length) or LIMIT
@@ -10,4 +10,15 @@ timed_small_run() {
     .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/$name" --config small --steps "$steps" \
         --time-limit "$LIMIT" --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 \
         --no-progress "$@"
+}
+
+# score_runs NAME...: every checkpoint of each W/NAME on the ladder's validation objects, the runs side by side;
+# writes W/score_NAME.json.
+score_runs() {
+    local name
+    for name in "$@"; do
+        .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_$name.json" \
+            --score-run "$W/$name" &
+    done
+    wait
 }
