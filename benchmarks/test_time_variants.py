@@ -44,8 +44,8 @@ from affnerf.predict.invert import (
     object_points,
     render_crop,
     search_cameras,
+    target_tensors,
 )
-from affnerf.predict.invert import _target_tensors as target_tensors
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.shipped import shipped_model
 

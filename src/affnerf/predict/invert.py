@@ -225,7 +225,7 @@ def crop_loss(
     return loss
 
 
-def _target_tensors(
+def target_tensors(
     target: CropTarget, size: int, device: torch.device
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
     """The crop resampled to ``size``: pixels (S*S, 2), colours (S*S, 3), mask (S*S,), intrinsics (4,), on
@@ -256,7 +256,7 @@ def search_cameras(
     size = config.resolution
     cameras = camera_grid(config.azimuths, config.elevations_deg, config.distances)
     device = next(model.parameters()).device
-    pixels, rgb, mask, k = _target_tensors(target, size, device)
+    pixels, rgb, mask, k = target_tensors(target, size, device)
     if len(points) == 0:
         return [(cameras[0], 0.0)]
     covered = mask.cpu().numpy().reshape(size, size) > SEARCH_COVERAGE
@@ -304,7 +304,7 @@ def fit_codes(
         first and after the last step over every crop pixel.
     """
     device = next(model.parameters()).device
-    pixels, rgb, mask, k = _target_tensors(target, config.resolution, device)
+    pixels, rgb, mask, k = target_tensors(target, config.resolution, device)
     n = len(pixels)
     bg = torch.as_tensor(np.asarray(background), dtype=torch.float32, device=device)
     start = [codes.shape.detach(), codes.appearance.detach()]
