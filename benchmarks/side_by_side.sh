@@ -13,7 +13,7 @@ timed_small_run() {
 }
 
 # score_runs NAME...: every checkpoint of each W/NAME on the ladder's validation objects, the runs side by side;
-# writes W/score_NAME.json.
+# writes W/score_NAME.json and all of them in one W/scores.json (the results file).
 score_runs() {
     local name
     for name in "$@"; do
@@ -21,4 +21,13 @@ score_runs() {
             --score-run "$W/$name" &
     done
     wait
+    .venv/bin/python - "$W" "$@" <<'PY'
+import json
+import sys
+
+work, names = sys.argv[1], sys.argv[2:]
+parts = [json.load(open(f"{work}/score_{name}.json")) for name in names]
+merged = {**parts[0], "runs": {run: score for part in parts for run, score in part["runs"].items()}}
+json.dump(merged, open(f"{work}/scores.json", "w"), indent=1)
+PY
 }

@@ -16,8 +16,7 @@ STEPS="${STEPS:-22000}"
 export OMP_NUM_THREADS=1
 .venv/bin/torchrun --standalone --nproc_per_node 2 -m affnerf.cli.main train --data "$DATA" --out "$W/run" \
     --config small --steps "$STEPS" --time-limit "$MINUTES" --device cpu --checkpoint-every 2000 \
-    --keep-checkpoints 100 \
-    --val-every 0 --cache-dir "$W/cache" --no-progress \
+    --keep-checkpoints 100 --val-every 0 --cache-dir "$W/cache" --no-progress \
     --model.field-width 128 --model.color-width 64 --model.affordance-width 64 --optim.lr 1e-3 --optim.lr-final 2e-5
 .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_wide.json" \
     --score-run "$W/run" --stride 2 &
@@ -34,3 +33,36 @@ for m in wide shipped; do
         --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val_$m" &
 done
 wait
+# everything above in one results file, W/wide_full_budget.json
+.venv/bin/python - "$W" <<'PY'
+import json
+import sys
+
+work = sys.argv[1]
+load = lambda path: json.load(open(f"{work}/{path}"))  # noqa: E731
+wide, shipped, summary = load("score_wide.json"), load("score_shipped.json"), load("run/summary.json")
+calibration = load("run/calibration.json")
+keep = ("split", "resolution", "levels", "optical_depths", "chosen_level", "chosen_optical_depth")
+result = {
+    "benchmark": "wide_full_budget",
+    "machine": wide["machine"],
+    "training": {
+        "command": "benchmarks/wide_full_budget.sh (torchrun, 2 processes, one thread each)",
+        "steps": summary["step"],
+        "seconds": summary["seconds"],
+        "model": {"field_width": 128, "color_width": 64, "affordance_width": 64},
+        "optim": {"lr": 1e-3, "lr_final": 2e-5},
+    },
+    "ladder": {
+        "heldout_objects": wide["heldout_objects"],
+        "wide": wide["runs"]["run"],
+        "shipped": shipped["reference"],
+    },
+    "calibration_wide": {key: calibration[key] for key in keep},
+    "validation_40": {
+        model: {key: load(f"val_{model}/metrics_affnerf.json")[key] for key in ("mean", "settings")}
+        for model in ("wide", "shipped")
+    },
+}
+json.dump(result, open(f"{work}/wide_full_budget.json", "w"), indent=1)
+PY
