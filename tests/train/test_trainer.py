@@ -106,6 +106,25 @@ def test_a_run_started_from_another_runs_weights_begins_where_that_run_ended_wit
     assert main(train_argv(replace(wider, init_from=tmp_path / "nothing"))) == 2
 
 
+def test_init_from_grows_a_concatenating_field_into_film_and_not_back(tiny_train_config, tmp_path, capsys):
+    first = tiny_train_config(out=tmp_path / "concat", steps=6)
+    train(first)
+    ended = torch.load(first.out / "checkpoints" / "step_00000006.pt", weights_only=True)["model"]
+    film = replace(first, out=first.out.parent / "film", steps=4, init_from=first.out)
+    film = replace(film, model=replace(film.model, conditioning="film"))
+    trainer = Trainer(film, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    grown = trainer.state.model.state_dict()
+    new_keys = sorted(set(grown) - set(ended))
+    assert new_keys and all(".film." in key for key in new_keys)
+    assert all(torch.equal(grown[key], ended[key]) for key in ended)
+    assert all(not grown[key].any() for key in new_keys)  # zero modulation: the same function as the source
+    train(film)
+    back = replace(first, out=first.out.parent / "back", steps=2, init_from=film.out)
+    assert main(train_argv(back)) == 2
+    assert "conditioning 'film' vs 'concat'" in capsys.readouterr().err
+
+
 def test_train_iteration_takes_exactly_one_step_and_hooks_do_the_rest(tiny_train_config):
     config = tiny_train_config(steps=4, checkpoint_every=2)
     trainer = Trainer(config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))

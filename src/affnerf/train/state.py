@@ -18,6 +18,7 @@ import torch
 from affnerf.errors import AffnerfError
 from affnerf.fileio import write_json_atomic
 from affnerf.model.base import ConditionedNeRF
+from affnerf.model.config import ModelConfig
 from affnerf.train import distributed as dist_utils
 from affnerf.train.checkpoint import check_compatible, list_checkpoints, load_checkpoint, save_checkpoint
 from affnerf.train.config import TrainConfig, config_to_json
@@ -41,9 +42,26 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
             raise AffnerfError(f"{source}: --init-from names a folder with no checkpoints/step_*.pt")
         path = found[-1]
     data = load_checkpoint(path)
-    check_compatible(data, model.config, num_classes, path)
-    model.load_state_dict(data["model"])
+    growing = grows_into_film(data, model.config)
+    check_compatible(
+        data, dataclasses.replace(model.config, conditioning="concat") if growing else model.config, num_classes, path
+    )
+    missing, unexpected = model.load_state_dict(data["model"], strict=not growing)
+    if unexpected or any(".film." not in key for key in missing):
+        raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
+    if growing:
+        log.info("%s: a concatenating field grown into FiLM; its modulation starts at zero", path)
     return path
+
+
+def grows_into_film(data: dict[str, Any], config: ModelConfig) -> bool:
+    """True when the checkpoint's field concatenates its code and ``config`` is otherwise the same field with FiLM.
+
+    Such a start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), so the grown
+    model computes what the checkpoint did, and training then learns the modulation from there.
+    """
+    saved = data.get("model_config", {})
+    return config.conditioning == "film" and saved.get("conditioning", "concat") == "concat"
 
 
 def prepare_run_folder(config: TrainConfig, ctx: dist_utils.Context) -> Path | None:
