@@ -81,10 +81,11 @@ class TrainConfig:
         time_limit: end this invocation after this many minutes with a checkpoint (0 = no limit); for machines
             lent in short slots: rerun with ``--resume`` until done.
         init_from: start from the weights of this checkpoint (a ``.pt`` file, the shipped model's included, or a
-            run folder: its last checkpoint) instead of the seed's initialisation; the architecture must match, except
-            that a concatenating field may start a FiLM one (``--model.conditioning film``; exact, the modulation
-            starts at zero). The optimiser, the step count and the learning-rate schedule start afresh (fine-tuning, or a second
-            stage with its own schedule). Ignored when resuming (the run's own checkpoint wins).
+            run folder: its last checkpoint) instead of the seed's initialisation; the architecture must match,
+            except that a concatenating field may start a FiLM one (``--model.conditioning film``; exact, the
+            modulation starts at zero). The optimiser, the step count and the learning-rate schedule start afresh
+            (fine-tuning, or a second stage with its own schedule). Ignored when resuming (the run's own checkpoint
+            wins).
     """
 
     data: Path
