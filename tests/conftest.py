@@ -81,6 +81,7 @@ def tiny_train_config(train_dataset, tmp_path):
             points_weight=0.0,
             mask_weight=0.0,
             depth_weight=0.0,
+            termination_weight=0.0,
             affordance_balance=0.0,
             input_jitter=0.0,
         )

@@ -26,7 +26,14 @@ TINY_MODEL = ModelConfig(
 )
 
 #: Training options beyond the paper that the ``small`` preset turns on and tiny test runs may turn off.
-LOSS_OPTIONS = ("points_weight", "mask_weight", "depth_weight", "affordance_balance", "input_jitter")
+LOSS_OPTIONS = (
+    "points_weight",
+    "mask_weight",
+    "depth_weight",
+    "termination_weight",
+    "affordance_balance",
+    "input_jitter",
+)
 
 
 def train_argv(config: TrainConfig, *extra: str) -> list[str]:

@@ -12,10 +12,16 @@ from support import straight_and_resumed_weights
 
 from affnerf.train.cache import cached_frames
 from affnerf.train.config import PAPER
-from affnerf.train.loss import class_weights
+from affnerf.train.loss import class_weights, termination_l1
 from affnerf.train.trainer import label_counts, train
 
-ALL_ON = {"mask_weight": 0.1, "depth_weight": 1.0, "affordance_balance": 0.5, "input_jitter": 1.0}
+ALL_ON = {
+    "mask_weight": 0.1,
+    "depth_weight": 1.0,
+    "termination_weight": 1.0,
+    "affordance_balance": 0.5,
+    "input_jitter": 1.0,
+}
 
 
 def _metrics(run):
@@ -24,6 +30,7 @@ def _metrics(run):
 
 def test_the_paper_preset_keeps_the_papers_loss_and_model():
     assert PAPER.mask_weight == PAPER.depth_weight == PAPER.affordance_balance == PAPER.input_jitter == 0
+    assert PAPER.termination_weight == 0
     assert PAPER.model.conditioning == "concat"
 
 
@@ -35,6 +42,30 @@ def test_mask_and_depth_terms_are_logged_and_fall(tiny_train_config):
     assert all({"loss/mask", "loss/depth"} <= set(r) for r in rows)
     first, last = np.mean([r["loss/mask"] for r in rows[:5]]), np.mean([r["loss/mask"] for r in rows[-5:]])
     assert last < 0.8 * first, (first, last)
+
+
+def test_termination_term_is_logged_and_pulls_weight_onto_the_surface(tiny_train_config, tmp_path):
+    ends = {}
+    for name, weight in (("mask_only", 0.0), ("with_termination", 3.0)):
+        config = tiny_train_config(out=tmp_path / name, steps=40, checkpoint_every=40, mask_weight=1.0)
+        config = replace(config, termination_weight=weight, optim=replace(config.optim, lr=3e-3))
+        train(config)
+        rows = _metrics(config.out)
+        assert all("loss/termination" in r for r in rows)  # logged whenever a ray geometry term is on
+        ends[name] = np.mean([r["loss/termination"] for r in rows[-10:]])
+    assert ends["with_termination"] < ends["mask_only"], ends
+
+
+def test_termination_costs_weight_off_the_surface_and_never_rewards_adding_it():
+    t = torch.tensor([[0.3, 0.4, 0.5]])
+    surface = torch.tensor([0.4])
+    on = termination_l1(torch.tensor([[0.0, 1.0, 0.0]]), t, surface)
+    halo = termination_l1(torch.tensor([[0.3, 0.7, 0.0]]), t, surface)
+    empty = termination_l1(torch.zeros(1, 3), t, surface)
+    assert float(on) == 0.0 == float(empty) and float(halo) > 0.0
+    weights = torch.tensor([[0.2, 0.3, 0.1]], requires_grad=True)
+    termination_l1(weights, t, surface).backward()
+    assert bool((weights.grad >= 0).all())  # more weight anywhere never lowers it (the depth L1 rewards it)
 
 
 def test_cached_depth_matches_the_dataset_and_balanced_weights_favour_rare_classes(tiny_train_config, train_dataset):

@@ -55,7 +55,10 @@ class TrainConfig:
             square root of inverse frequency, so thin parts such as blades and handles count more).
         mask_weight: weight of the BCE between each rendered ray's opacity and the object mask (0 = off, the paper).
         depth_weight: weight of the L1 between each object ray's rendered and true z-depth in metres (0 = off, the
-            paper); uses the dataset's depth maps.
+            paper); uses the dataset's depth maps. It thickens outlines (benchmarks/results/fine_tune_losses.md).
+        termination_weight: weight of the mean distance in metres between where each object ray's rendering weight
+            lies and the true surface, Σ w·|t − depth| (0 = off, the paper): places density on the surface
+            without the depth L1's push towards opacity.
         input_jitter: strength of the random colour, framing, blur and noise changes to the encoders' crops
             (:mod:`affnerf.train.augment`; 0 = off, the paper; 1 = the documented ranges).
         points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
@@ -105,6 +108,7 @@ class TrainConfig:
     affordance_balance: float = 0.0
     mask_weight: float = 0.0
     depth_weight: float = 0.0
+    termination_weight: float = 0.0
     input_jitter: float = 0.0
     points_weight: float = 0.0
     points_per_object: int = 1024

@@ -23,10 +23,9 @@ from affnerf.train.logger import MetricsLogger
 from affnerf.train.validate import validate
 
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
-#: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with mask
-#: or depth losses ``loss/mask`` and ``loss/depth``; the pose-aware model's ``loss/camera``; GSNeRF's
-#: ``loss/source_depth``) and the learning rate it
-#: used (``train/lr``, a float).
+#: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with
+#: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
+#: ``loss/camera``; GSNeRF's ``loss/source_depth``) and the learning rate it used (``train/lr``, a float).
 IterationOutputs = dict[str, torch.Tensor | float]
 
 
@@ -72,6 +71,7 @@ class LogScalars:
         "loss/point_affordance",
         "loss/mask",
         "loss/depth",
+        "loss/termination",
         "loss/camera",
         "loss/source_depth",
     )

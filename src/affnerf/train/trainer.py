@@ -323,10 +323,12 @@ class Trainer:
         for name, term in auxiliary.items():  # the model's own (pose-aware camera, GSNeRF source depth), as weighted
             parts[name] = term.detach()
             total = total + term
-        if config.mask_weight > 0 or config.depth_weight > 0:
+        weights = (config.mask_weight, config.depth_weight, config.termination_weight)
+        if any(w > 0 for w in weights):
             stages = [coarse] if fine is None else [coarse, fine]
-            rays = ray_geometry_loss(stages, batch.labels, batch.depth, config.mask_weight, config.depth_weight)
+            rays = ray_geometry_loss(stages, batch.labels, batch.depth, weights)
             parts["loss/mask"], parts["loss/depth"] = rays.mask.detach(), rays.depth.detach()
+            parts["loss/termination"] = rays.termination.detach()
             total = total + rays.total
         if points is None or geometry is None:
             return total, parts
