@@ -18,9 +18,7 @@ LIMIT="$((MINUTES + 1))"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 # build the frame and point cache before either run is timed
-rm -rf "$W/warm"
-.venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-    --val-every 0 --cache-dir "$W/cache" --no-progress
+warm_cache "$W/cache"
 timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache" &
 timed_small_run wide "$WIDE_STEPS" --cache-dir "$W/cache" --model.field-width 128 --model.color-width 64 \
     --model.affordance-width 64 &

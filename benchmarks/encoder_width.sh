@@ -17,9 +17,7 @@ LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 # build the frame and point cache before either run is timed (the encoders' width does not change the crops)
-rm -rf "$W/warm"
-.venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-    --val-every 0 --cache-dir "$W/cache" --no-progress
+warm_cache "$W/cache"
 timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache" &
 timed_small_run enc050 "$WIDE_STEPS" --cache-dir "$W/cache" --model.encoder-width 0.5 &
 wait

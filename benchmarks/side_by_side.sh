@@ -1,6 +1,15 @@
 # Sourced by the benchmarks that train two `small` runs side by side, one core each, for the same minutes
-# (capacity.sh, encoder_size.sh), and score them. Needs DATA, W and LIMIT (a run's time limit in minutes).
+# (capacity.sh, encoder_size.sh, encoder_width.sh, further_stage.sh), and score them. Needs DATA, W and LIMIT (a
+# run's time limit in minutes).
 # shellcheck shell=bash
+
+# warm_cache CACHE: build the frame and point cache of DATA in CACHE (a one-step run in W/warm) before any run is
+# timed, so no run pays for decoding.
+warm_cache() {
+    rm -rf "$W/warm"
+    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
+        --val-every 0 --cache-dir "$1" --no-progress
+}
 
 # timed_small_run NAME STEPS [TRAIN OPTIONS...]: train W/NAME for STEPS steps (its schedule's length) or LIMIT
 # minutes, whichever ends first, keeping a checkpoint every 1,000 steps for benchmarks/ablation_ladder.py.
