@@ -5,7 +5,7 @@
 # src/affnerf/weights/affnerf-small.pt, one core each, for the same MINUTES, each with a fresh Adam and a schedule
 # 2e-4 -> 2e-5 that ends when the minutes do (as the third stage of results/second_stage.md; pass the steps each
 # run makes in MINUTES side by side); then scores every checkpoint of both, and the shipped model, on the ladder's 16
-# validation objects. Used by fine_tune_losses.sh and fine_tune_film.sh.
+# validation objects. Used by the fine_tune_*.sh scripts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 NAME="$1"
@@ -22,9 +22,7 @@ LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 # build the frame and point cache before either run is timed
-rm -rf "$W/warm"
-.venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-    --val-every 0 --cache-dir "$W/cache" --no-progress
+warm_cache "$W/cache"
 timed_small_run plain "$PLAIN_STEPS" "${STAGE[@]}" &
 timed_small_run "$NAME" "$STEPS" "${STAGE[@]}" "$@" &
 wait
