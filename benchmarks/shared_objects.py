@@ -165,6 +165,54 @@ def spread(values: list[float | None]) -> dict[str, float | None]:
             "spread": max(finite) - min(finite)}  # fmt: skip
 
 
+def predict_and_score(
+    predictor: Predictor, rgb: np.ndarray, az: int, info: dict, image: Path, truth: tuple, fit_steps: int
+) -> tuple[dict, np.ndarray, set[int]]:
+    """Predict from one ray-cast input photo (saved to ``image``) and score it against ``truth`` (the novel pose,
+    its true affordance and the true mesh's samples): the view's record, its picture row and the classes it shows."""
+    novel_pose, true_affordance, truth_samples = truth
+    started = time.perf_counter()
+    image.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(rgb).save(image)
+    pred_rgb, labels, mesh, separated_by = predict_view(predictor, image, novel_pose, fit_steps)
+    score = score_mesh(mesh, truth_samples, sample_seed(SEED, info["id"]))
+    m2d, m2d_obj = miou_2d(true_affordance, labels, len(predictor.classes))
+    seen = set(np.unique(labels).tolist()) | set(np.unique(mesh.face_props["affordance"]).tolist())
+    record = {
+        "azimuth_deg": az,
+        "fscore_1cm": score["fscore_1cm"],
+        "affordance_miou_3d": score["affordance_miou_3d"],
+        "chamfer_l1": score["chamfer_l1"],
+        "miou_2d": m2d,
+        "miou_2d_object": m2d_obj,
+        "mesh_faces": len(mesh.faces),
+        "separated_by": separated_by,
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+    shown = {k: v for k, v in record.items() if k not in ("azimuth_deg", "separated_by")}
+    print(f"{info['id']} az {az:3d}: " + ", ".join(f"{k} {v}" for k, v in shown.items()), flush=True)
+    row = picture_row(
+        f"input az {az} deg -> F@1cm {fmt(record['fscore_1cm'])}, 3D mIoU "
+        f"{fmt(record['affordance_miou_3d'])}, 2D mIoU {fmt(m2d)}, {len(mesh.faces)} faces",
+        [tile(rgb), tile(overlay_affordance(pred_rgb, labels)), mesh_tile(mesh)],
+    )
+    return record, row, seen
+
+
+def write_sheet(rows: list[np.ndarray], present: set[int], classes, path: Path) -> None:
+    """The object's picture: a header, its rows and the legend of the classes present, as a palette PNG."""
+    width = max(r.shape[1] for r in rows)
+    header = text_strip(
+        "columns: input (ray-cast photo) | predicted affordance at a fixed novel view (az 30, el 40) | "
+        "predicted mesh by affordance (front-right, back-right)",
+        width,
+        16,
+    )
+    ids = sorted(c for c in present if c > 0)
+    sheet = stack_rows([header, *rows, legend(ids, classes, width)])
+    Image.fromarray(sheet).quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
+
+
 def run_object(
     name: str,
     info: dict,
@@ -191,47 +239,15 @@ def run_object(
     ]  # fmt: skip
     views = []
     for az in azimuths:
-        started = time.perf_counter()
         frame = caster.cast_frame(input_intr, camera(az, INPUT_ELEVATION, INPUT_RADIUS))
         image = work / "inputs" / f"{name}_az{az:03d}.png"
-        image.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(frame.rgb).save(image)
-        rgb, labels, mesh, separated_by = predict_view(predictor, image, novel_pose, fit_steps)
-        score = score_mesh(mesh, truth_samples, sample_seed(SEED, info["id"]))
-        m2d, m2d_obj = miou_2d(true_novel.affordance, labels, len(classes))
-        present |= set(np.unique(labels).tolist()) | set(np.unique(mesh.face_props["affordance"]).tolist())
-        record = {
-            "azimuth_deg": az,
-            "fscore_1cm": score["fscore_1cm"],
-            "affordance_miou_3d": score["affordance_miou_3d"],
-            "chamfer_l1": score["chamfer_l1"],
-            "miou_2d": m2d,
-            "miou_2d_object": m2d_obj,
-            "mesh_faces": len(mesh.faces),
-            "separated_by": separated_by,
-            "seconds": round(time.perf_counter() - started, 1),
-        }
+        truth = (novel_pose, true_novel.affordance, truth_samples)
+        record, row, seen = predict_and_score(predictor, frame.rgb, az, info, image, truth, fit_steps)
         views.append(record)
-        shown = {k: v for k, v in record.items() if k not in ("azimuth_deg", "separated_by")}
-        print(f"{info['id']} az {az:3d}: " + ", ".join(f"{k} {v}" for k, v in shown.items()), flush=True)
-        rows.append(
-            picture_row(
-                f"input az {az} deg -> F@1cm {fmt(record['fscore_1cm'])}, 3D mIoU "
-                f"{fmt(record['affordance_miou_3d'])}, 2D mIoU {fmt(m2d)}, {len(mesh.faces)} faces",
-                [tile(frame.rgb), tile(overlay_affordance(rgb, labels)), mesh_tile(mesh)],
-            )
-        )
-    width = max(r.shape[1] for r in rows)
-    header = text_strip(
-        "columns: input (ray-cast photo) | predicted affordance at a fixed novel view (az 30, el 40) | "
-        "predicted mesh by affordance (front-right, back-right)",
-        width,
-        16,
-    )
-    ids = sorted(c for c in present if c > 0)
-    sheet = stack_rows([header, *rows, legend(ids, classes, width)])
+        rows.append(row)
+        present |= seen
     path = out / f"shared_{name}.png"
-    Image.fromarray(sheet).quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
+    write_sheet(rows, present, classes, path)
     summary = {key: spread([v[key] for v in views])
                for key in ("fscore_1cm", "affordance_miou_3d", "miou_2d", "miou_2d_object", "mesh_faces")}  # fmt: skip
     return {
@@ -245,7 +261,8 @@ def run_object(
     }
 
 
-def main() -> None:
+def parse_args() -> argparse.Namespace:
+    """The command line."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--checkpoint", type=Path, default=shipped_model())
     parser.add_argument(
@@ -256,7 +273,11 @@ def main() -> None:
     parser.add_argument("--objects", nargs="*", default=list(OBJECTS))
     parser.add_argument("--azimuths", nargs="*", type=int, default=list(INPUT_AZIMUTHS), help="for quick checks")
     parser.add_argument("--fit-steps", type=int, default=PredictConfig.fit_steps, help="0: the encoder's codes")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = parse_args()
     started = time.perf_counter()
     args.work.mkdir(parents=True, exist_ok=True)
     args.out.mkdir(parents=True, exist_ok=True)
