@@ -20,25 +20,20 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, choose_views, object_targets, view_order
 from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
 from affnerf.model.affnerf import Codes
-from affnerf.model.views import render_view
+from affnerf.model.views import camera_rays, render_view
 from affnerf.predict.loading import load_model
-from affnerf.rendering.rays import pixel_rays
 from affnerf.train.loss import nerf_loss
 
 
 def view_rays(obj: ObjectData, views: list[int], scale: float) -> tuple[torch.Tensor, ...]:
     """Every pixel of ``views`` at ``scale``: origins (R, 3), directions (R, 3), colours (R, 3), labels (R,)."""
     target_set, labels, rgb = object_targets(obj, views, scale)
-    k = target_set.intrinsics
-    vv, uu = np.mgrid[0 : k.height, 0 : k.width]
-    pixels = torch.from_numpy(np.stack([uu.ravel(), vv.ravel()], 1))
-    kt = torch.tensor([k.fl_x, k.fl_y, k.cx, k.cy], dtype=torch.float64)
-    rays = [pixel_rays(pixels, kt, torch.as_tensor(pose, dtype=torch.float64)) for pose in target_set.poses]
+    rays = [camera_rays(target_set.intrinsics, pose) for pose in target_set.poses]
     origins = torch.cat([o for o, _ in rays]).float()
     dirs = torch.cat([d for _, d in rays]).float()
     colours = torch.from_numpy(rgb.reshape(-1, 3).astype(np.float32) / 255.0)
@@ -97,12 +92,8 @@ def main() -> None:
     protocol = ProtocolConfig(target_views=5, scale=0.25)
     n = len(dataset.affordance_classes)
     conf: dict[str, dict[str, np.ndarray]] = {"encoder": {}, "fitted": {}}
-    counts: dict[str, int] = {}
     start = time.perf_counter()
-    for entry in dataset.objects(args.split):
-        if counts.get(entry.category, 0) >= args.per_category:
-            continue
-        counts[entry.category] = counts.get(entry.category, 0) + 1
+    for entry in interleave_categories(dataset.objects(args.split), args.per_category):
         obj = dataset.load_object(entry)
         inputs, targets = choose_views(len(obj), entry.id, protocol)
         fit_views = [v for v in view_order(len(obj), entry.id, 1) if v not in inputs + targets][: args.fit_views]

@@ -13,19 +13,14 @@ MINUTES="${MINUTES:-22}"
 export OMP_NUM_THREADS=1
 SMALL_STEPS="${SMALL_STEPS:-10000}"
 CROP_STEPS="${CROP_STEPS:-10000}"
-CROP="--model.encoder-resolution 96"
+CROP=(--model.encoder-resolution 96)
 LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 # build both frame caches (the crops depend on the encoder's resolution) before either run is timed
-for c in small:"" crop96:"$CROP"; do
-    rm -rf "$W/warm"
-    # shellcheck disable=SC2086
-    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-        --val-every 0 --cache-dir "$W/cache_${c%%:*}" --no-progress ${c#*:}
-done
+warm_cache "$W/cache_small"
+warm_cache "$W/cache_crop96" "${CROP[@]}"
 timed_small_run small "$SMALL_STEPS" --cache-dir "$W/cache_small" &
-# shellcheck disable=SC2086
-timed_small_run crop96 "$CROP_STEPS" --cache-dir "$W/cache_crop96" $CROP &
+timed_small_run crop96 "$CROP_STEPS" --cache-dir "$W/cache_crop96" "${CROP[@]}" &
 wait
 score_runs small crop96

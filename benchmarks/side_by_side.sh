@@ -3,12 +3,14 @@
 # run's time limit in minutes).
 # shellcheck shell=bash
 
-# warm_cache CACHE: build the frame and point cache of DATA in CACHE (a one-step run in W/warm) before any run is
-# timed, so no run pays for decoding.
+# warm_cache CACHE [TRAIN OPTIONS...]: build the frame and point cache of DATA in CACHE (a one-step run in W/warm,
+# with the options that change the crops) before any run is timed, so no run pays for decoding.
 warm_cache() {
+    local cache=$1
+    shift
     rm -rf "$W/warm"
     .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-        --val-every 0 --cache-dir "$1" --no-progress
+        --val-every 0 --cache-dir "$cache" --no-progress "$@"
 }
 
 # timed_small_run NAME STEPS [TRAIN OPTIONS...]: train W/NAME for STEPS steps (its schedule's length) or LIMIT

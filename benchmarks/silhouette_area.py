@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.data.dataset import Dataset
+from affnerf.data.dataset import Dataset, interleave_categories
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, choose_views, object_targets
 from affnerf.model.views import render_view
@@ -28,13 +28,9 @@ def silhouette_scores(checkpoint: Path, dataset: Dataset, per_category: int, con
     loaded = load_model(checkpoint, "cpu")
     loaded.model.eval()
     method = ConditionedNeRFMethod(loaded)
-    counts: dict[str, int] = {}
     inter = union = predicted = true = 0
     bg_opacity, obj_opacity = [], []
-    for entry in dataset.objects("val"):
-        if counts.get(entry.category, 0) >= per_category:
-            continue
-        counts[entry.category] = counts.get(entry.category, 0) + 1
+    for entry in interleave_categories(dataset.objects("val"), per_category):
         obj = dataset.load_object(entry)
         inputs, targets = choose_views(len(obj), entry.id, config)
         target_set, gt, _ = object_targets(obj, targets, config.scale)

@@ -38,6 +38,14 @@ class RenderedView:
         return self.affordance.argmax(axis=-1).astype(np.uint8)
 
 
+def camera_rays(intrinsics: Intrinsics, c2w: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
+    """Rays through every pixel of a camera, row by row: (H*W, 3) origins and directions, float64."""
+    vv, uu = np.mgrid[0 : intrinsics.height, 0 : intrinsics.width]
+    pixels = torch.from_numpy(np.stack([uu.ravel(), vv.ravel()], 1))
+    k = torch.tensor([intrinsics.fl_x, intrinsics.fl_y, intrinsics.cx, intrinsics.cy], dtype=torch.float64)
+    return pixel_rays(pixels, k, torch.as_tensor(np.asarray(c2w), dtype=torch.float64))
+
+
 @torch.no_grad()
 def render_view(
     model: ConditionedNeRF,
@@ -63,10 +71,7 @@ def render_view(
     """
     device = next(model.parameters()).device
     h, w = intrinsics.height, intrinsics.width
-    vv, uu = np.mgrid[0:h, 0:w]
-    pixels = torch.from_numpy(np.stack([uu.ravel(), vv.ravel()], 1))
-    k = torch.tensor([intrinsics.fl_x, intrinsics.fl_y, intrinsics.cx, intrinsics.cy], dtype=torch.float64)
-    origins, dirs = pixel_rays(pixels, k, torch.as_tensor(np.asarray(c2w), dtype=torch.float64))
+    origins, dirs = camera_rays(intrinsics, c2w)
     bg = torch.as_tensor(np.asarray(background), dtype=torch.float32, device=device)
     rgb, depth, opacity, aff = [], [], [], []
     for start in range(0, h * w, chunk):
