@@ -55,7 +55,8 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
 
 
 def grows_into_film(data: dict[str, Any], config: ModelConfig) -> bool:
-    """True when the checkpoint's field concatenates its code and ``config`` is otherwise the same field with FiLM.
+    """True when the checkpoint's field concatenates its code and ``config`` asks for FiLM (that the rest of the
+    architecture matches is :func:`check_compatible`'s business).
 
     Such a start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), so the grown
     model computes what the checkpoint did, and training then learns the modulation from there.
