@@ -90,3 +90,11 @@ def test_a_run_with_every_option_resumes_to_the_same_weights(tiny_train_config, 
     a, b = straight_and_resumed_weights(straight, stop_at=10)
     assert any(k.endswith("film.weight") for k in a)
     assert all(torch.equal(a[k], b[k]) for k in a)
+
+
+def test_a_triplane_run_resumes_to_the_same_weights(tiny_train_config, tmp_path):
+    straight = tiny_train_config(out=tmp_path / "straight", points_weight=0.1)
+    model = replace(straight.model, conditioning="triplane", plane_resolution=8, plane_channels=4)
+    a, b = straight_and_resumed_weights(replace(straight, model=model), stop_at=10)
+    assert any(k.startswith("planes.") for k in a)
+    assert all(torch.equal(a[k], b[k]) for k in a)

@@ -8,9 +8,10 @@ import torch
 
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
-from affnerf.model.field import ObjectCodes
+from affnerf.model.field import ObjectCodes, per_object
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.model.resnet import CodeEncoder
+from affnerf.model.triplane import PlaneGenerator, sample_planes
 
 __all__ = ["AffNeRF", "Codes", "RayOutputs"]
 
@@ -27,7 +28,8 @@ class AffNeRF(ConditionedNeRF):
     """Two ResNet18 encoders and a coarse and a fine field conditioned on their codes.
 
     The shape code joins PE(position) in the trunk (density, affordance, feature); the appearance code joins
-    PE(direction) and the feature in the colour head.
+    PE(direction) and the feature in the colour head. With ``triplane`` conditioning the trunk also reads each
+    point's features from planes the shape code is decoded into (:mod:`affnerf.model.triplane`).
 
     Args:
         config: architecture and sampling.
@@ -40,7 +42,13 @@ class AffNeRF(ConditionedNeRF):
         super().__init__(config, num_classes)
         self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width)
         self.appearance_encoder = CodeEncoder(config.code_dim, config.encoder_width)
-        self.renderer = FieldRenderer(config, num_classes, config.code_dim, config.code_dim)
+        self.planes: PlaneGenerator | None = None
+        trunk_dim = config.code_dim
+        if config.conditioning == "triplane":
+            self.planes = PlaneGenerator(config.code_dim, config.plane_channels, config.plane_resolution)
+            trunk_dim = 3 * config.plane_channels + config.code_dim
+        self.renderer = FieldRenderer(config, num_classes, trunk_dim, config.code_dim)
+        self._planes_memo: tuple[torch.Tensor, tuple[int, int, bool], torch.Tensor] | None = None
 
     def encode(self, images: torch.Tensor) -> Codes:
         """(B, 3, S, S) object crops in [0, 1] -> their codes."""
@@ -64,8 +72,31 @@ class AffNeRF(ConditionedNeRF):
         multiplies each object's code with its weights once, not once per point.
         """
 
-        def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes, ObjectCodes]:
+        planes = None if self.planes is None else self.decode_planes(encoding.shape)
+
+        def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes | torch.Tensor, ObjectCodes]:
             pick = torch.nn.functional.one_hot(ray_object[rays], encoding.shape.shape[0]).to(encoding.shape.dtype)
-            return ObjectCodes(encoding.shape, pick), ObjectCodes(encoding.appearance, pick)
+            appearance = ObjectCodes(encoding.appearance, pick)
+            if planes is None:
+                return ObjectCodes(encoding.shape, pick), appearance
+            half = self.config.scene_half_extent
+            width = planes.shape[1] * planes.shape[2]
+            feats = per_object(ray_object[rays], points, width, lambda b, p: sample_planes(planes[b], p, half))
+            return torch.cat([feats, pick @ encoding.shape], dim=-1), appearance
 
         return cond
+
+    def decode_planes(self, shape: torch.Tensor) -> torch.Tensor:
+        """(B, 3, C, R, R) triplanes of (B, code_dim) shape codes.
+
+        The last result is kept while the code tensor, the generator's weights and the grad mode stay the same: a
+        training step conditions its rays and its 3D points on one encoding, and whole images are rendered chunk by
+        chunk, so the generator runs once for them all. The memo holds the code tensor itself, so its identity
+        cannot pass to a new tensor.
+        """
+        assert self.planes is not None
+        key = (shape._version, self.planes.stem.weight._version, torch.is_grad_enabled())
+        memo = self._planes_memo
+        if memo is None or memo[0] is not shape or memo[1] != key:
+            memo = self._planes_memo = (shape, key, self.planes(shape))
+        return memo[2]

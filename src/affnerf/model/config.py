@@ -54,7 +54,12 @@ class ModelConfig:
             calibrate``.
         conditioning: how the trunk takes its per-point conditioning (the shape code, or PixelNeRF-M's features):
             ``concat`` joins it to PE(position) at the input and at the skip (the paper), ``film`` also scales and
-            shifts every trunk layer's pre-activation by it (FiLM, as Occupancy Networks' CBN decoder).
+            shifts every trunk layer's pre-activation by it (FiLM, as Occupancy Networks' CBN decoder); ``triplane``
+            (AFF-NeRF only, beyond the paper) decodes the shape code once per object into three axis-aligned
+            feature planes over the scene cube, and each point's features read from them join PE(position) and the
+            code (:mod:`affnerf.model.triplane`).
+        plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
+        plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -78,7 +83,9 @@ class ModelConfig:
     surface_density: float = 50.0
     surface_optical_depth: float = 0.0
     occupancy_density: float = 5.0
-    conditioning: Literal["concat", "film"] = "concat"
+    conditioning: Literal["concat", "film", "triplane"] = "concat"
+    plane_resolution: int = 64
+    plane_channels: int = 16
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint

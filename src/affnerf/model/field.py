@@ -69,6 +69,21 @@ def linear_with_code(layer: nn.Linear, x: torch.Tensor, code: Code) -> torch.Ten
     return nn.functional.linear(x, w[:, :-d]) + code.apply(lambda t: nn.functional.linear(t, w[:, -d:], layer.bias))
 
 
+def per_object(
+    point_object: torch.Tensor,
+    points: torch.Tensor,
+    width: int,
+    fn: Callable[[int, torch.Tensor], torch.Tensor],
+) -> torch.Tensor:
+    """(N, width): ``fn(b, points of object b)`` -> (N_b, width) for each object b among the (N,) ``point_object``,
+    placed back in the points' order."""
+    out = points.new_zeros(len(points), width)
+    for b in torch.unique(point_object).tolist():
+        sel = point_object == b
+        out[sel] = fn(b, points[sel])
+    return out
+
+
 @dataclass(frozen=True)
 class FieldOutput:
     """Field values at sample points.

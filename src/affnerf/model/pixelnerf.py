@@ -9,7 +9,6 @@ cameras' poses.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import torch
@@ -19,6 +18,7 @@ from torch.nn import functional as F
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
+from affnerf.model.field import per_object
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.model.resnet import ResNet18
 
@@ -98,21 +98,6 @@ def pixel_aligned_code(
         feat = sample_features(features[v], pix, size)
         codes.append(net(torch.cat([feat, positional_encoding(cam, VIEW_PE)], dim=-1)))
     return torch.stack(codes).mean(0)
-
-
-def per_object(
-    point_object: torch.Tensor,
-    points: torch.Tensor,
-    width: int,
-    fn: Callable[[int, torch.Tensor], torch.Tensor],
-) -> torch.Tensor:
-    """(N, width): ``fn(b, points of object b)`` -> (N_b, width) for each object b among the (N,) ``point_object``,
-    placed back in the points' order."""
-    out = points.new_zeros(len(points), width)
-    for b in torch.unique(point_object).tolist():
-        sel = point_object == b
-        out[sel] = fn(b, points[sel])
-    return out
 
 
 class PixelNeRF(ConditionedNeRF):

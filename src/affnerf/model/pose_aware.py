@@ -33,7 +33,8 @@ from affnerf.model.camera_head import (
 )
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim
-from affnerf.model.pixelnerf import VIEW_PE, per_object, pixel_aligned_code, stack_stages
+from affnerf.model.field import per_object
+from affnerf.model.pixelnerf import VIEW_PE, pixel_aligned_code, stack_stages
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.model.resnet import CodeEncoder, ResNet18
 

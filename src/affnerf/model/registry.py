@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import get_args, get_type_hints
 
+from affnerf.errors import AffnerfError
 from affnerf.model.affnerf import AffNeRF
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
@@ -44,7 +45,11 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
 
     Raises:
         ValueError: for a kind no class is registered under.
+        AffnerfError: for ``triplane`` conditioning of another kind than ``affnerf`` (only AFF-NeRF's shape code
+            can be decoded into planes).
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
+    if config.conditioning == "triplane" and config.kind != "affnerf":
+        raise AffnerfError(f"triplane conditioning decodes AFF-NeRF's shape code; a {config.kind} model has none")
     return MODEL_KINDS[config.kind](config, num_classes)
