@@ -69,9 +69,9 @@ class AffNeRF(ConditionedNeRF):
         The codes are picked with a one-hot product rather than indexing: the gradient of an indexed read sums
         many points into few rows in an order that varies between runs on a multi-core CPU, and a resumed run must
         end with the same weights as an uninterrupted one. They stay factored (:class:`ObjectCodes`): the field
-        multiplies each object's code with its weights once, not once per point.
+        multiplies each object's code with its weights once, not once per point. With ``triplane`` conditioning
+        the trunk takes each point's reads of its object's planes beside its shape code, per point.
         """
-
         planes = None if self.planes is None else self.decode_planes(encoding.shape)
 
         def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes | torch.Tensor, ObjectCodes]:
