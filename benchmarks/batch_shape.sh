@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # How should a step's supervision be spread over objects? (issue 12; benchmarks/results/batch_shape.md). The small
 # preset draws 4 objects a step, 64 rays and 1,024 3D points each. The code oracle (code_oracle.md) left "more
-# supervision per object visit" untested: here 2 objects with 128 rays and 2,048 points each, and 8 objects with 32
-# rays and 512 points each, the same rays and points a step (the field's cost) with half or twice the encoder passes.
-# Side by side, one core each, 33.5 minutes or 17,500 steps; the preset's own run is triplane.sh's `small` (18,000
-# steps in 33.5 minutes beside another training). Each final model is evaluated on 40 validation objects.
+# supervision per object visit" untested: here the same rays and points a step (the field's cost) over 2, 8 and 16
+# objects (128, 32 and 16 rays each), and 8 objects with the preset's 1,024 points each. Two side by side, one core
+# each, 33.5 minutes or 17,500 steps; the preset's own run is triplane.sh's `small` (18,000 steps in 33.5 minutes
+# beside another training). Each final model is evaluated on 40 validation objects.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -19,7 +19,10 @@ warm_cache "$CACHE"
 timed_small_run o8 "$STEPS" --cache-dir "$CACHE" --objects-per-step 8 --points-per-object 512 &
 timed_small_run o2 "$STEPS" --cache-dir "$CACHE" --objects-per-step 2 --points-per-object 2048 &
 wait
-for name in o8 o2; do
+timed_small_run o16 "$STEPS" --cache-dir "$CACHE" --objects-per-step 16 --points-per-object 256 &
+timed_small_run o8p "$STEPS" --cache-dir "$CACHE" --objects-per-step 8 --points-per-object 1024 &
+wait
+for name in o2 o8 o16 o8p; do
     .venv/bin/affnerf eval --run "$W/$name" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
         --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$name" &
 done
