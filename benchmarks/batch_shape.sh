@@ -23,8 +23,7 @@ timed_small_run o16 "$STEPS" --cache-dir "$CACHE" --objects-per-step 16 --points
 timed_small_run o8p "$STEPS" --cache-dir "$CACHE" --objects-per-step 8 --points-per-object 1024 &
 wait
 for name in o2 o8 o16 o8p; do
-    .venv/bin/affnerf eval --run "$W/$name" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$name" &
+    val40 "$name" "$W/$name" &
 done
 wait
 # the shorter pair: 16 against 32 objects a step, 18 minutes each
@@ -33,7 +32,6 @@ timed_small_run s16 9000 --cache-dir "$CACHE" --objects-per-step 16 --points-per
 timed_small_run s32 8000 --cache-dir "$CACHE" --objects-per-step 32 --points-per-object 128 &
 wait
 for name in s16 s32; do
-    .venv/bin/affnerf eval --run "$W/$name" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$name" &
+    val40 "$name" "$W/$name" &
 done
 wait

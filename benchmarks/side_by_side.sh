@@ -1,6 +1,6 @@
 # Sourced by the benchmarks that train two `small` runs side by side, one core each, for the same minutes
-# (capacity.sh, encoder_size.sh, encoder_width.sh, further_stage.sh), and score them. Needs DATA, W and LIMIT (a
-# run's time limit in minutes).
+# (capacity.sh, encoder_size.sh, encoder_width.sh, further_stage.sh, triplane.sh, batch_shape.sh), and score them.
+# Needs DATA, W and LIMIT (a run's time limit in minutes).
 # shellcheck shell=bash
 
 # warm_cache CACHE [TRAIN OPTIONS...]: build the frame and point cache of DATA in CACHE (a one-step run in W/warm,
@@ -41,4 +41,11 @@ parts = [json.load(open(f"{work}/score_{name}.json")) for name in names]
 merged = {**parts[0], "runs": {run: score for part in parts for run, score in part["runs"].items()}}
 json.dump(merged, open(f"{work}/scores.json", "w"), indent=1)
 PY
+}
+
+# val40 NAME RUN-OR-CHECKPOINT: AFF-NeRF on 40 validation objects of DATA (5 per category, input view 0, 5 target
+# views at 100x75, meshes at 96^3), written to W/val40_NAME.
+val40() {
+    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
+        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }

@@ -21,10 +21,6 @@ LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 CACHE="${CACHE:-$W/cache}"
-val40() {  # val40 NAME CHECKPOINT-OR-RUN
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
-}
 warm_cache "$CACHE"
 timed_small_run small "$SMALL_STEPS" --cache-dir "$CACHE" &
 timed_small_run tri64 "$TRI64_STEPS" --cache-dir "$CACHE" --model.conditioning triplane &

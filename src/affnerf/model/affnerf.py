@@ -76,13 +76,13 @@ class AffNeRF(ConditionedNeRF):
 
         def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes | torch.Tensor, ObjectCodes]:
             pick = torch.nn.functional.one_hot(ray_object[rays], encoding.shape.shape[0]).to(encoding.shape.dtype)
-            appearance = ObjectCodes(encoding.appearance, pick)
+            shape, appearance = ObjectCodes(encoding.shape, pick), ObjectCodes(encoding.appearance, pick)
             if planes is None:
-                return ObjectCodes(encoding.shape, pick), appearance
+                return shape, appearance
             half = self.config.scene_half_extent
             width = planes.shape[1] * planes.shape[2]
             feats = per_object(ray_object[rays], points, width, lambda b, p: sample_planes(planes[b], p, half))
-            return torch.cat([feats, pick @ encoding.shape], dim=-1), appearance
+            return torch.cat([feats, shape.per_point()], dim=-1), appearance
 
         return cond
 
