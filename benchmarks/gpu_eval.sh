@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# The shipped model's 2D tables on one lent GPU machine, in one command that fits a 10-minute slot (issue 12):
+# Table 2 at 200x150 (test split, 5 objects per category, 20 targets; affnerf, affnerf-fit, retrieval, constant),
+# the baselines' shared protocol (2 objects per category, 5 targets at 200x150) and view stability (first test object
+# of each category from 4 input-view sets, 10 targets at 100x75, meshes at 96^3): the protocols of
+# reproduce_tables.sh, one process per category side by side (objects are evaluated independently), each folder
+# merged afterwards by benchmarks/merge_eval.py. It first runs the CUDA-only tests.
+#
+#   RUN=src/affnerf/weights/affnerf-small.pt bash benchmarks/gpu_eval.sh
+#
+# Writes $OUT/device.txt, $OUT/tests.log and $OUT/gpu_eval.tar.gz (one folder per protocol and category, logs).
+# Needs python3 with CUDA torch, and the wheels of trimesh, embreex, shapely, mapbox-earcut, rtree, tyro,
+# docstring-parser, typeguard and shtab in .whl/ when the machine lacks them (benchmarks/README.md). A category whose
+# CUDA evaluation fails is evaluated again on the CPU (its log says so).
+set -uo pipefail
+cd "$(dirname "$0")/.."
+RUN="${RUN:-src/affnerf/weights/affnerf-small.pt}"
+W="${WORK:-/tmp/gpu}"
+OUT="${OUT:-$W/out}"
+PY="${PY:-python3}"
+DEVICE="${DEVICE:-cuda}"
+OBJECTS="${OBJECTS:-80}"    # objects per category (80: the dataset of every committed table)
+WORKERS="${WORKERS:-16}"    # data generation processes
+CATS="${CATS:-screwdriver pen scissors eyeglasses bucket bottle cabinet teapot}"
+mkdir -p "$W" "$OUT"
+T0=$(date +%s)
+elapsed() { echo $(($(date +%s) - T0)); }
+
+if [ -d .whl ] && ! "$PY" -c "import trimesh, embreex, tyro" 2>/dev/null; then
+    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
+fi
+export PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONUNBUFFERED=1 OMP_NUM_THREADS="${OMP_NUM_THREADS:-2}"
+A() { "$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())' "$@"; }
+D="$W/data"
+
+# ev OUT-FOLDER OPTIONS...: one `affnerf eval` on $DEVICE, again on the CPU if that fails
+ev() {
+    local out=$1
+    shift
+    A eval --run "$RUN" --data "$D" --out "$out" "$@" --device "$DEVICE" --chunk 16384 ||
+        { echo "eval on $DEVICE failed ($*): again on the CPU"; A eval --run "$RUN" --data "$D" --out "$out" "$@" --device cpu; }
+}
+
+# one category: every protocol, one after the other
+category() {
+    local c=$1
+    ev "$W/table2/$c" --split test --categories "$c" --method affnerf,retrieval,constant --scale 0.5 --target-views 20 \
+        --max-objects 5
+    ev "$W/table2/$c" --split test --categories "$c" --method affnerf-fit --scale 0.5 --target-views 20 --max-objects 5
+    ev "$W/base/$c" --split test --categories "$c" --method affnerf,retrieval,constant --scale 0.5 --target-views 5 \
+        --max-objects 2
+    ev "$W/stability/$c" --split test --categories "$c" --method affnerf,affnerf-fit,retrieval --target-views 10 \
+        --scale 0.25 --max-objects 1 --mesh-resolution 96 --stability-views 4
+    echo "$c done at $(elapsed) s"
+}
+
+{
+    nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv 2>&1
+    "$PY" -c "import torch; print('torch', torch.__version__, 'cuda', torch.cuda.is_available())"
+    nproc
+} > "$OUT/device.txt"
+"$PY" -m pytest -q -p no:cacheprovider tests/model/test_model.py -k gpu > "$OUT/tests.log" 2>&1 &
+[ -f "$D/dataset.json" ] || A data generate --out "$D" --objects-per-category "$OBJECTS" --views 30 \
+    --workers "$WORKERS" --seed 0 > "$W/data.log" 2>&1
+echo "data at $(elapsed) s" | tee -a "$OUT/device.txt"
+wait
+for c in $CATS; do
+    category "$c" > "$W/eval-$c.log" 2>&1 &
+done
+wait
+echo "evaluations done at $(elapsed) s" | tee -a "$OUT/device.txt"
+tail -n 3 "$W"/eval-*.log
+tar -czf "$OUT/gpu_eval.tar.gz" -C "$W" table2 base stability data.log $(cd "$W" && ls eval-*.log)
