@@ -12,6 +12,7 @@ from affnerf.data.raycast import FrameCaster
 from affnerf.data.writer import surface_from_record
 from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate, merge_metrics
 from affnerf.eval.report import table2_markdown
+from affnerf.eval.stability import StabilityRecord, merge_stability, stability_json
 from affnerf.meshio import LabelledMesh, read_labelled_ply
 from affnerf.metrics.surface import SURFACE_KEYS
 
@@ -100,3 +101,33 @@ def test_evaluations_of_disjoint_categories_merge_into_the_evaluation_of_all(obj
     other = {**parts[1].to_json(), "method": "retrieval"}
     with pytest.raises(ValueError, match="different methods"):
         merge_metrics([parts[0].to_json(), other])
+
+
+def test_view_stability_of_disjoint_categories_merges_into_that_of_all(objects):
+    everything, num_classes = objects
+    config = ProtocolConfig(target_views=2, scale=0.25, metrics_3d=True, stability_views=3)
+    whole = evaluate(TrueMeshMethod(), everything, config, "test", num_classes).to_json()
+    categories = sorted({o.record.category for o in everything})
+    parts = [
+        evaluate(TrueMeshMethod(), [o for o in everything if o.record.category == c], config, "test", num_classes)
+        for c in categories
+    ]
+    merged = merge_metrics([p.to_json() for p in parts])
+    assert merged["stability"] == whole["stability"] and len(merged["stability"]["objects"]) == 2
+    without = {k: v for k, v in parts[1].to_json().items() if k != "stability"}
+    with pytest.raises(ValueError, match="only some parts"):
+        merge_metrics([parts[0].to_json(), without])
+
+
+def test_merged_stability_recomputes_spreads_and_means_from_the_records():
+    a = stability_json([StabilityRecord("a_0", "a", [[0], [1]], [0.5, 0.7], [0.9, 0.6])], 2)
+    b = stability_json([StabilityRecord("b_0", "b", [[0], [1]], [0.4, 0.4], [None, 0.5])], 2)
+    merged = merge_stability([b, a])
+    assert merged["mean"]["mIoU_spread"] == pytest.approx(0.1)  # (0.2 + 0.0) / 2 categories
+    assert merged["mean"]["fscore_1cm_spread"] == pytest.approx(0.3)  # b has no spread: a missing F-score
+    assert merged["mean"]["objects"] == 2 and set(merged["objects"]) == {"a_0", "b_0"}
+    assert merged["categories"]["a"] == a["categories"]["a"]
+    with pytest.raises(ValueError, match="more than one part"):
+        merge_stability([a, a])
+    with pytest.raises(ValueError, match="different numbers"):
+        merge_stability([a, {**b, "views": 3}])

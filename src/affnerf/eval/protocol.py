@@ -21,7 +21,7 @@ from PIL import Image
 
 from affnerf.data.cameras import Intrinsics
 from affnerf.data.dataset import ObjectData
-from affnerf.eval.stability import StabilityRecord, input_sets, stability_json
+from affnerf.eval.stability import StabilityRecord, input_sets, merge_stability, stability_json
 from affnerf.eval.surface import (
     SurfaceScore,
     category_surface,
@@ -193,14 +193,17 @@ def merge_metrics(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """One method's ``metrics.json`` from evaluations of disjoint categories (run side by side, one per core):
     their categories together and the mean over all of them, as one evaluation of every category gives.
 
+    View stability, when every part carries it, is merged from the per-object records (:func:`merge_stability`).
+
     Raises:
-        ValueError: when the parts are of different methods or splits, overlap in a category, or carry view
-            stability (its spreads need the per-object records; evaluate it in one run).
+        ValueError: when the parts are of different methods or splits, overlap in a category, or only some of them
+            carry view stability.
     """
     if len({(p["method"], p["split"]) for p in parts}) != 1:
         raise ValueError("merge_metrics: the parts are of different methods or splits")
-    if any("stability" in p for p in parts):
-        raise ValueError("merge_metrics: view stability cannot be merged; evaluate it in one run")
+    with_stability = ["stability" in p for p in parts]
+    if any(with_stability) and not all(with_stability):
+        raise ValueError("merge_metrics: only some parts carry view stability")
     cats: dict[str, dict[str, Any]] = {}
     for part in parts:
         twice = sorted(set(part["categories"]) & set(cats))
@@ -209,6 +212,8 @@ def merge_metrics(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
         cats.update(part["categories"])
     metrics_3d = any("fscore_1cm" in m for m in cats.values())
     merged = {"categories": dict(sorted(cats.items())), "mean": category_mean(cats, metrics_3d)}
+    if all(with_stability):
+        merged["stability"] = merge_stability([p["stability"] for p in parts])
     return {**merged, "method": parts[0]["method"], "split": parts[0]["split"], "settings": parts[0].get("settings")}
 
 

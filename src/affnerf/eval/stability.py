@@ -91,3 +91,26 @@ def stability_json(records: list[StabilityRecord], views: int) -> dict[str, Any]
     }
     mean["objects"] = len(records)
     return {"views": views, "objects": objects, "categories": categories, "mean": mean}
+
+
+def records_from_json(section: dict[str, Any]) -> list[StabilityRecord]:
+    """The per-object records of a :func:`stability_json` section (its spreads are recomputed from them)."""
+    return [
+        StabilityRecord(oid, o["category"], o["inputs"], o["mIoU"], o["fscore_1cm"])
+        for oid, o in section["objects"].items()
+    ]
+
+
+def merge_stability(sections: list[dict[str, Any]]) -> dict[str, Any]:
+    """One :func:`stability_json` section from sections of disjoint objects (evaluations run side by side), as one
+    evaluation of all of them gives.
+
+    Raises:
+        ValueError: when the sections used different numbers of input-view sets or share an object.
+    """
+    if len({s["views"] for s in sections}) != 1:
+        raise ValueError("merge_stability: the parts used different numbers of input-view sets")
+    records = [r for s in sections for r in records_from_json(s)]
+    if len({r.object_id for r in records}) < len(records):
+        raise ValueError("merge_stability: an object is in more than one part")
+    return stability_json(records, sections[0]["views"])
