@@ -81,11 +81,12 @@ def main() -> None:
     parser.add_argument("--target-views", type=int, default=5)
     parser.add_argument("--scale", type=float, default=0.25)
     parser.add_argument("--mesh-resolution", type=int, default=96)
+    parser.add_argument("--device", default="cpu", help="cpu or cuda")
     args = parser.parse_args()
     ds = Dataset.open(args.data)
     objects = [ds.load_object(e) for e in interleave_categories(ds.objects("val"), args.max_objects)]
     protocol = ProtocolConfig(1, args.target_views, args.scale, 0, metrics_3d=True)
-    loaded = load_model(args.run, torch.device("cpu"))
+    loaded = load_model(args.run, torch.device(args.device))
     rows = []
     for name, settings in VARIANTS:
         mean, seconds = run_variant(
@@ -104,6 +105,7 @@ def main() -> None:
         "settings": {k: str(v) for k, v in vars(args).items()},
         "machine": {"platform": platform.platform(), "cpu_count": os.cpu_count(),
                     "torch_threads": torch.get_num_threads(), "torch": torch.__version__,
+                    "gpu": torch.cuda.get_device_name(0) if args.device == "cuda" else None,
                     "date": time.strftime("%Y-%m-%d %H:%M:%S")},
     })  # fmt: skip
 
