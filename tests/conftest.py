@@ -9,7 +9,7 @@ import pytest
 from support import TINY_MODEL
 
 from affnerf.data.generate import GenerateConfig, generate_dataset
-from affnerf.train.config import SMALL, TrainConfig
+from affnerf.train.config import SMALL, OptimConfig, TrainConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 #: Real PartNet-Mobility objects for development, beside the checkout (never copied into the repo).
@@ -70,6 +70,8 @@ def tiny_train_config(train_dataset, tmp_path):
             model=TINY_MODEL,
             rays_per_step=128,
             objects_per_step=2,
+            # a schedule for tens of steps, not the preset's 46,000 (whose 2e-5 end would stall a 50-step run)
+            optim=OptimConfig(lr=1e-3, lr_final=1e-4),
             checkpoint_every=10,
             log_every=1,
             val_every=0,

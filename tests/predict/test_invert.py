@@ -129,9 +129,11 @@ def test_invert_keeps_codes_without_steps_and_restores_gradients():
 
 
 def test_the_shipped_model_fits_a_photo_and_finds_its_camera(tmp_path, tiny_config):
-    """A 400x300 render of a screwdriver (its camera known): the fit lowers the photometric loss, and the camera
-    it finds has the true azimuth (a screwdriver's outline and colours tell it; its elevation they do not: lying
-    flat, it casts nearly the same bar from 15 and from 65 degrees)."""
+    """A 400x300 render of a screwdriver (its camera known): a photometric fit (the label terms off) lowers the
+    photometric loss, and the camera it finds has the true azimuth (a screwdriver's outline and colours tell it;
+    its elevation they do not: lying flat, it casts nearly the same bar from 15 and from 65 degrees). (With the
+    default label terms the shipped model's photometric loss can rise: they pull the codes towards the encoder's
+    labels; benchmarks/results/inversion_sweep.md.)"""
     from affnerf.data.dataset import Dataset
     from affnerf.data.generate import generate_dataset
     from affnerf.predict.predictor import Predictor
@@ -149,7 +151,7 @@ def test_the_shipped_model_fits_a_photo_and_finds_its_camera(tmp_path, tiny_conf
     predictor = Predictor.load(shipped_model(), "cpu")
     encoded = predictor.encode_image(photo)
     before = encoded.codes
-    result = predictor.fit(encoded, InversionConfig(steps=15))
+    result = predictor.fit(encoded, InversionConfig(steps=15, affordance_weight=0.0, anchor_points=0))
     assert encoded.codes is result.codes and encoded.codes is not before and encoded.inversion is result
     assert result.loss_end < result.loss_start
     eye = obj.pose(0)[:3, 3]
