@@ -16,14 +16,8 @@ import shutil
 from pathlib import Path
 
 from affnerf.eval.grasp_table import summarise, table3_markdown
+from affnerf.eval.protocol import merge_settings
 from affnerf.fileio import write_json_atomic
-
-
-def merged_settings(parts: list[Path]) -> dict:
-    """The first part's settings, with every part's categories and the longest part's seconds."""
-    settings = [json.loads((p / "grasp_metrics.json").read_text())["settings"] for p in parts]
-    categories = " | ".join(s["categories"] for s in settings) + f" ({len(parts)} processes side by side)"
-    return {**settings[0], "categories": categories, "seconds": max(float(s["seconds"]) for s in settings)}
 
 
 def main() -> None:
@@ -35,7 +29,10 @@ def main() -> None:
     ids = [o["object_id"] for o in objects]
     if len(set(ids)) != len(ids):
         raise SystemExit("merge_grasps: the parts share objects; merge runs of disjoint categories")
-    summary, context = summarise(objects), merged_settings(args.parts)
+    summary, context = (
+        summarise(objects),
+        merge_settings([json.loads((p / "grasp_metrics.json").read_text())["settings"] for p in args.parts]),
+    )
     args.out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(args.out / "grasp_objects.json", objects)
     write_json_atomic(args.out / "grasp_metrics.json", {**summary, "settings": context})

@@ -10,7 +10,7 @@ import pytest
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.data.raycast import FrameCaster
 from affnerf.data.writer import surface_from_record
-from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate, merge_metrics
+from affnerf.eval.protocol import Prediction, ProtocolConfig, TargetSet, evaluate, merge_metrics, merge_settings
 from affnerf.eval.report import table2_markdown
 from affnerf.eval.stability import StabilityRecord, merge_stability, stability_json
 from affnerf.meshio import LabelledMesh, read_labelled_ply
@@ -131,3 +131,10 @@ def test_merged_stability_recomputes_spreads_and_means_from_the_records():
         merge_stability([a, a])
     with pytest.raises(ValueError, match="different numbers"):
         merge_stability([a, {**b, "views": 3}])
+
+
+def test_merged_settings_name_every_part_and_the_longest_time():
+    parts = [{"categories": "pen", "seconds": 4.0, "scale": "0.5"}, {"categories": "bottle", "seconds": 6.5}]
+    merged = merge_settings(parts)
+    assert merged == {"categories": "pen | bottle (2 processes side by side)", "seconds": 6.5, "scale": "0.5"}
+    assert merge_settings([None, parts[0]]) is None and merge_settings([]) is None

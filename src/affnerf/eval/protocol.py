@@ -189,9 +189,28 @@ def category_mean(cats: dict[str, dict[str, Any]], metrics_3d: bool) -> dict[str
     return mean
 
 
+def merge_settings(settings: Sequence[dict[str, Any] | None]) -> dict[str, Any] | None:
+    """The settings of evaluations of disjoint categories run side by side, as one record: the first part's, with
+    every part's ``categories`` and the longest part's ``seconds`` (the wall time of the side-by-side run); the
+    first part's as they are when any part has no settings.
+
+    Example:
+        >>> merge_settings([{"categories": "pen", "seconds": 4.0}, {"categories": "bottle", "seconds": 6.5}])
+        {'categories': 'pen | bottle (2 processes side by side)', 'seconds': 6.5}
+    """
+    if not settings or any(s is None for s in settings):
+        return settings[0] if settings else None
+    categories = (
+        " | ".join(str(s.get("categories", "")) for s in settings) + f" ({len(settings)} processes side by side)"
+    )
+    seconds = max(float(s.get("seconds", 0.0)) for s in settings)
+    return {**settings[0], "categories": categories, "seconds": seconds}
+
+
 def merge_metrics(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """One method's ``metrics.json`` from evaluations of disjoint categories (run side by side, one per core):
-    their categories together and the mean over all of them, as one evaluation of every category gives.
+    their categories together and the mean over all of them, as one evaluation of every category gives, with the
+    parts' settings merged by :func:`merge_settings`.
 
     View stability, when every part carries it, is merged from the per-object records (:func:`merge_stability`).
 
@@ -214,7 +233,8 @@ def merge_metrics(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
     merged = {"categories": dict(sorted(cats.items())), "mean": category_mean(cats, metrics_3d)}
     if all(with_stability):
         merged["stability"] = merge_stability([p["stability"] for p in parts])
-    return {**merged, "method": parts[0]["method"], "split": parts[0]["split"], "settings": parts[0].get("settings")}
+    settings = merge_settings([p.get("settings") for p in parts])
+    return {**merged, "method": parts[0]["method"], "split": parts[0]["split"], "settings": settings}
 
 
 def object_targets(obj: ObjectData, targets: list[int], scale: float) -> tuple[TargetSet, np.ndarray, np.ndarray]:
