@@ -7,12 +7,14 @@ import json
 from dataclasses import replace
 
 import numpy as np
+import pytest
 import torch
 from support import straight_and_resumed_weights
 
 from affnerf.train.cache import cached_frames
+from affnerf.errors import AffnerfError
 from affnerf.train.config import PAPER
-from affnerf.train.loss import class_weights, termination_l1
+from affnerf.train.loss import class_weights, code_consistency, termination_l1
 from affnerf.train.trainer import label_counts, train
 
 ALL_ON = {
@@ -21,6 +23,7 @@ ALL_ON = {
     "termination_weight": 1.0,
     "affordance_balance": 0.5,
     "input_jitter": 1.0,
+    "view_consistency_weight": 0.1,
 }
 
 
@@ -30,7 +33,7 @@ def _metrics(run):
 
 def test_the_paper_preset_keeps_the_papers_loss_and_model():
     assert PAPER.mask_weight == PAPER.depth_weight == PAPER.affordance_balance == PAPER.input_jitter == 0
-    assert PAPER.termination_weight == 0
+    assert PAPER.termination_weight == PAPER.view_consistency_weight == 0
     assert PAPER.model.conditioning == "concat"
 
 
@@ -98,3 +101,40 @@ def test_a_triplane_run_resumes_to_the_same_weights(tiny_train_config, tmp_path)
     a, b = straight_and_resumed_weights(replace(straight, model=model), stop_at=10)
     assert any(k.startswith("planes.") for k in a)
     assert all(torch.equal(a[k], b[k]) for k in a)
+
+
+def test_code_consistency_is_zero_for_agreeing_views_and_blind_to_the_codes_scale():
+    g = torch.Generator().manual_seed(0)
+    first = torch.randn(6, 8, generator=g)
+    second = first + 0.3 * torch.randn(6, 8, generator=g)
+    assert code_consistency(first, first).item() == 0.0
+    near = code_consistency(first, second)
+    assert near > 0
+    assert torch.isclose(code_consistency(10 * first, 10 * second), near, rtol=1e-5)  # shrinking cannot lower it
+    assert code_consistency(first, first + 0.6 * (second - first)) < near
+    pulled = first.clone().requires_grad_(True)
+    code_consistency(pulled, second).backward()
+    step = pulled - 0.1 * pulled.grad  # the gradient moves the first view's codes towards the second's
+    assert code_consistency(step.detach(), second) < near
+
+
+def test_view_consistency_term_is_logged_and_falls(tiny_train_config):
+    config = tiny_train_config(steps=40, checkpoint_every=40, view_consistency_weight=1.0)
+    train(replace(config, optim=replace(config.optim, lr=3e-3)))
+    rows = _metrics(config.out)
+    assert all("loss/view_consistency" in r for r in rows)
+    first = np.mean([r["loss/view_consistency"] for r in rows[:5]])
+    last = np.mean([r["loss/view_consistency"] for r in rows[-5:]])
+    assert last < 0.7 * first, (first, last)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [({"objects_per_step": 1}, "at least 2 objects"), ({"model": "pixelnerf"}, "global codes")],
+)
+def test_view_consistency_refuses_what_it_cannot_compare(tiny_train_config, overrides, message):
+    config = tiny_train_config(view_consistency_weight=0.1)
+    if overrides.get("model"):
+        overrides = {"model": replace(config.model, kind=overrides["model"])}
+    with pytest.raises(AffnerfError, match=message):
+        train(replace(config, **overrides))

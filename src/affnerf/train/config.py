@@ -59,6 +59,12 @@ class TrainConfig:
         termination_weight: weight of the mean distance in metres between where each object ray's rendering weight
             lies and the true surface, Σ w·|t − depth| (0 = off, the paper): places density on the surface
             without the depth L1's push towards opacity.
+        view_consistency_weight: weight of the agreement between the codes of two views of each training object
+            (0 = off, the paper): each object also encodes a second random view, and the squared distance between
+            its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
+            code_consistency`, shape and appearance codes alike), is added at this weight; only the first view's
+            codes render. Beyond the paper, so that one object predicted from different photos agrees with itself.
+            Global-code models only (``--model.kind affnerf``), at least 2 objects a step.
         input_jitter: strength of the random colour, framing, blur and noise changes to the encoders' crops
             (:mod:`affnerf.train.augment`; 0 = off, the paper; 1 = the documented ranges).
         points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
@@ -109,6 +115,7 @@ class TrainConfig:
     mask_weight: float = 0.0
     depth_weight: float = 0.0
     termination_weight: float = 0.0
+    view_consistency_weight: float = 0.0
     input_jitter: float = 0.0
     points_weight: float = 0.0
     points_per_object: int = 1024
@@ -173,6 +180,17 @@ SMALL = replace(
 
 
 PRESETS: dict[str, TrainConfig] = {"paper": PAPER, "small": SMALL}
+
+
+def check_options(config: TrainConfig) -> None:
+    """Raise :class:`AffnerfError` with one line when options that only work together are combined wrongly."""
+    if config.view_consistency_weight > 0:
+        if config.model.kind != "affnerf":
+            raise AffnerfError(
+                f"--view-consistency-weight needs global codes (--model.kind affnerf), not {config.model.kind!r}"
+            )
+        if config.objects_per_step < 2:
+            raise AffnerfError("--view-consistency-weight needs at least 2 objects a step (--objects-per-step)")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

@@ -25,7 +25,8 @@ from affnerf.train.validate import validate
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
 #: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with
 #: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
-#: ``loss/camera``; GSNeRF's ``loss/source_depth``) and the learning rate it used (``train/lr``, a float).
+#: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``, weighted) and
+#: the learning rate it used (``train/lr``, a float).
 IterationOutputs = dict[str, torch.Tensor | float]
 
 
@@ -74,6 +75,7 @@ class LogScalars:
         "loss/termination",
         "loss/camera",
         "loss/source_depth",
+        "loss/view_consistency",
     )
 
     def __init__(

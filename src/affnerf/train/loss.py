@@ -1,7 +1,7 @@
 """The training loss: L = MSE(coarse) + MSE(fine) + lambda * (CE(coarse) + CE(fine)) (the paper's eq. 6-8), and
 the optional terms beyond the paper: class-balanced CE (:func:`class_weights`), mask and depth losses on the
-rendered rays (:func:`ray_geometry_loss`) and 3D supervision of both fields at points with known occupancy and
-affordance (:func:`point_loss`)."""
+rendered rays (:func:`ray_geometry_loss`), 3D supervision of both fields at points with known occupancy and
+affordance (:func:`point_loss`) and agreement between the codes of two views of an object (:func:`code_consistency`)."""
 
 from __future__ import annotations
 
@@ -230,3 +230,13 @@ def point_loss(
     ce = [point_affordance_ce(logits, labels, class_weight) for _, logits in fields]
     occ_sum, ce_sum = torch.stack(occ).sum(), torch.stack(ce).sum()
     return PointTerms(weight * (occ_sum + affordance_weight * ce_sum), occ_sum, ce_sum, occ[-1], ce[-1])
+
+
+def code_consistency(first: torch.Tensor, second: torch.Tensor, eps: float = 1e-8) -> torch.Tensor:
+    """How far apart two views' codes of the same objects are, relative to how far apart the objects are: the mean
+    of ||first_b − second_b||² over the B objects divided by the mean squared distance of ``first``'s codes from
+    their batch mean (a constant: no gradient), so shrinking every code does not lower it. (B, D) and (B, D) -> 0-d.
+    B must be at least 2."""
+    gap = (first - second).pow(2).sum(-1).mean()
+    spread = (first - first.mean(0)).pow(2).sum(-1).mean().detach()
+    return gap / (spread + eps)

@@ -33,10 +33,17 @@ from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
 from affnerf.train.augment import jitter_crops
 from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
-from affnerf.train.config import TrainConfig
+from affnerf.train.config import TrainConfig, check_options
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
-from affnerf.train.loss import class_weights, nerf_loss, occupancy_slab, point_loss, ray_geometry_loss
+from affnerf.train.loss import (
+    class_weights,
+    code_consistency,
+    nerf_loss,
+    occupancy_slab,
+    point_loss,
+    ray_geometry_loss,
+)
 from affnerf.train.points import PointSet
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.state import TrainingState, initial_weights, params_checksum, prepare_run_folder
@@ -49,7 +56,7 @@ def learning_rate(config: TrainConfig, step: int) -> float:
 
     Example:
         >>> from pathlib import Path
-        >>> from affnerf.train.config import TrainConfig
+        >>> from affnerf.train.config import TrainConfig, check_options
         >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100)
         >>> learning_rate(c, 0), round(learning_rate(c, 50), 12), round(learning_rate(c, 100), 12)
         (0.0005, 0.000158113883, 5e-05)
@@ -144,24 +151,36 @@ def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> d
 
 class TrainingPass(torch.nn.Module):
     """One training forward pass of a model: encode the input views, render the rays and, when points are given,
-    evaluate both fields there with the same codes (one module call, so DistributedDataParallel sees it all)."""
+    evaluate both fields there with the same codes (one module call, so DistributedDataParallel sees it all).
 
-    def __init__(self, model: ConditionedNeRF) -> None:
+    With ``consistency_weight`` > 0 the batch holds one more view per object than the model encodes
+    (``encoded_views``); its codes only enter ``loss/view_consistency`` (:func:`code_consistency`, weighted)."""
+
+    def __init__(self, model: ConditionedNeRF, encoded_views: int = 1, consistency_weight: float = 0.0) -> None:
         super().__init__()
         self.model = model
+        self.encoded_views = encoded_views
+        self.consistency_weight = consistency_weight
 
     def forward(
         self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
     ) -> tuple[RayOutputs, RayOutputs | None, list[tuple[torch.Tensor, torch.Tensor]] | None, dict[str, torch.Tensor]]:
         """(coarse, fine, per-field (density, logits) at the points or None, the model's auxiliary losses), as
         ``model.forward`` + points."""
-        m = self.model
-        encoding = m.encode_views(batch.images, batch.input_intrinsics, batch.input_poses)
+        m, v = self.model, self.encoded_views
+        encoding = m.encode_views(batch.images[:, :v], batch.input_intrinsics[:, :v], batch.input_poses[:, :v])
         coarse, fine = m.render_rays(
             encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
         )
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
-        return coarse, fine, geometry, m.auxiliary_losses(encoding, batch.input_depth)
+        auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v])
+        if self.consistency_weight > 0:
+            other = m.encode_views(batch.images[:, v:], batch.input_intrinsics[:, v:], batch.input_poses[:, v:])
+            agreement = code_consistency(encoding.shape, other.shape) + code_consistency(
+                encoding.appearance, other.appearance
+            )
+            auxiliary["loss/view_consistency"] = self.consistency_weight * agreement / 2
+        return coarse, fine, geometry, auxiliary
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
@@ -205,6 +224,7 @@ class Trainer:
         the point sets), build the model, optimiser and samplers, restore the last checkpoint when resuming (or
         load ``init_from``'s weights), and make the logger, progress bar and hooks."""
         config, ctx = self.config, self.ctx
+        check_options(config)
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
@@ -222,7 +242,7 @@ class Trainer:
             source = initial_weights(config.init_from, self.state.model, len(self.dataset.affordance_classes))
             if ctx.is_main:
                 log.info("started from the weights of %s", source)
-        self.net = TrainingPass(self.state.model)
+        self.net = TrainingPass(self.state.model, config.input_views, config.view_consistency_weight)
         if ctx.distributed:
             device_ids = [ctx.device.index] if ctx.device.type == "cuda" else None
             self.net = DistributedDataParallel(self.net, device_ids=device_ids)
@@ -243,7 +263,7 @@ class Trainer:
             config.seed,
             ctx.rank,
             ctx.world,
-            config.input_views,
+            config.input_views + (1 if config.view_consistency_weight > 0 else 0),
         )
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         return TrainingState(model, optimizer, sampler, generator)
