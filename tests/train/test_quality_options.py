@@ -11,8 +11,8 @@ import pytest
 import torch
 from support import straight_and_resumed_weights
 
-from affnerf.train.cache import cached_frames
 from affnerf.errors import AffnerfError
+from affnerf.train.cache import cached_frames
 from affnerf.train.config import PAPER
 from affnerf.train.loss import class_weights, code_consistency, termination_l1
 from affnerf.train.trainer import label_counts, train
