@@ -258,3 +258,13 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, case, expected):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and re.search(expected, err[0]), err
+
+
+def test_a_wider_clearance_keeps_grasps_clear_of_the_opening():
+    # a 0.07 x 0.07 x 0.3 m bar fits the 0.08 m gripper only across its 0.07 m sides
+    bar = trimesh.creation.box((0.07, 0.07, 0.3))
+    obj = GraspObject(np.asarray(bar.vertices), np.asarray(bar.faces), None, "bar")
+    plan = PlanConfig(num=8, refine=RefineConfig(steps=0))
+    grasps = plan_grasps(obj, plan)
+    assert grasps and all(0.069 < g.width <= 0.08 - 0.004 for g in grasps)
+    assert plan_grasps(obj, PlanConfig(num=8, refine=RefineConfig(steps=0), width_clearance=0.015)) == []

@@ -25,7 +25,7 @@ from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PART_MARGIN, Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.planner import PART_MARGIN, WIDTH_CLEARANCE, Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
 from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
@@ -72,6 +72,9 @@ class GraspEvalConfig:
         agreement_distance: with ``fit_steps``, the task part is planned first on the faces the encoder's own
             prediction confirms (same label within this distance, canonical frame;
             :func:`~affnerf.predict.agreement.agreeing_faces`); 0 = off.
+        predicted_clearance: on the predicted models, grasps stay this far (metres) below the gripper's opening
+            (:class:`~affnerf.grasp.planner.PlanConfig` ``width_clearance``; a true mesh keeps the planner's
+            default), because a section the model makes too narrow may not fit the gripper on the true object.
     """
 
     run: Path
@@ -94,6 +97,7 @@ class GraspEvalConfig:
     part_margin: float = PART_MARGIN
     fit_steps: int = 30
     agreement_distance: float = AGREEMENT_DISTANCE
+    predicted_clearance: float = WIDTH_CLEARANCE
 
 
 def predicted_object(
@@ -220,10 +224,10 @@ def evaluate_object(
     for name, mesh in (("true", gt), ("predicted", predicted)):
         for surface, affordance in (("whole", "none"), ("part", task)):
             planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
-            cond = f"{name}_{surface}"
-            grasps, result[cond] = _condition(
-                gt, planning, replace(plan, affordance=affordance), task, mass, config, size.source
-            )
+            cond, settings = f"{name}_{surface}", replace(plan, affordance=affordance)
+            if name == "predicted":
+                settings = replace(settings, width_clearance=config.predicted_clearance)
+            grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
             panels[cond] = (mesh, grasps)
     if picture is not None:
         from affnerf.eval.grasp_pictures import write_category_picture

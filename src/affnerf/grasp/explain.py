@@ -14,8 +14,6 @@ from affnerf.grasp.size import extent
 from affnerf.grasp.target import GraspObject
 from affnerf.vocab import AFFORDANCE_CLASSES, affordance_id
 
-CLEARANCE = 0.004  #: the planner keeps pairs at most max_opening - CLEARANCE apart (planner.sample_antipodal)
-
 
 def narrowest_width(
     obj: GraspObject, mask: np.ndarray | None, mu: float, samples: int = 2000, seed: int = 0
@@ -52,13 +50,13 @@ def _other_affordances(obj: GraspObject, wanted: str, mu: float) -> dict[str, fl
 
 
 def _advice(
-    width: float | None, fits: bool, others: dict[str, float], size: float, source: str, hand: ParallelJawGripper
+    width: float | None, fits: bool, others: dict[str, float], size: float, source: str, opening: float, clear: float
 ) -> list[str]:
-    """What to change, most specific first."""
-    fitting = sorted((w, name) for name, w in others.items() if w <= hand.max_opening - CLEARANCE)
+    """What to change, most specific first (``opening`` the gripper's, ``clear`` the planner's width clearance)."""
+    fitting = sorted((w, name) for name, w in others.items() if w <= opening - clear)
     advice = [f"--affordance {name} (narrowest {w:.3f} m)" for w, name in fitting]
     if not fits and width is not None:
-        advice.append(f"a gripper opening of at least {width + CLEARANCE:.3f} m (--max-opening)")
+        advice.append(f"a gripper opening of at least {width + clear:.3f} m (--max-opening)")
         if source != "transforms.json scale":
             advice.append(f"--object-size METRES if the object is smaller than the {size:.3f} m assumed ({source})")
     if fits:
@@ -73,13 +71,13 @@ def explain_no_grasps(
     ``{"reason", "affordance", "narrowest_width", "max_opening", "other_affordances", "advice"}``."""
     width = narrowest_width(obj, allowed_faces(obj, config.affordance), config.mu)
     where = "the surface" if config.affordance == "none" else f"the {config.affordance!r} surface"
-    fits = width is not None and width <= gripper.max_opening - CLEARANCE
+    fits = width is not None and width <= gripper.max_opening - config.width_clearance
     if width is None:
         reason = f"no pair of facing sides found on {where}"
     elif not fits:
         reason = (
             f"the narrowest section of {where} is {width:.3f} m across, wider than the gripper's"
-            f" {gripper.max_opening:.3f} m opening (less {CLEARANCE} m clearance)"
+            f" {gripper.max_opening:.3f} m opening (less {config.width_clearance} m clearance)"
         )
     else:
         reason = f"sections of {where} fit the opening ({width:.3f} m) but every grasp collided or lost its contacts"
@@ -90,7 +88,9 @@ def explain_no_grasps(
         "narrowest_width": None if width is None else round(width, 4),
         "max_opening": gripper.max_opening,
         "other_affordances": others,
-        "advice": _advice(width, fits, others, extent(obj.vertices), size_source, gripper),
+        "advice": _advice(
+            width, fits, others, extent(obj.vertices), size_source, gripper.max_opening, config.width_clearance
+        ),
     }
 
 

@@ -25,6 +25,7 @@ from affnerf.vocab import affordance_id
 
 #: Default ``part_margin`` of a restricted grasp, metres (benchmarks/results/grasp_margin.md).
 PART_MARGIN = 0.01
+WIDTH_CLEARANCE = 0.004  #: on a true mesh, grasps stay this far below the gripper's opening
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,9 @@ class PlanConfig:
             least reliable. Halved while that would leave nothing (:func:`shrink_part`), and when no grasp survives
             on what is left the whole part is planned on, so a margin never costs an object its grasps (0 = the
             whole part).
+        width_clearance: grasps are at most the gripper's opening less this wide (metres): a few millimetres on
+            an exact mesh; more on a mesh predicted from one image, whose widths are uncertain, so that a grasp
+            planned across a section the model made too narrow is not one the true object cannot fit.
     """
 
     affordance: str = "none"
@@ -58,6 +62,7 @@ class PlanConfig:
     surface_samples: int = 1500
     collision_tolerance: float = 0.001
     part_margin: float = PART_MARGIN
+    width_clearance: float = WIDTH_CLEARANCE
 
 
 @dataclass
@@ -130,9 +135,10 @@ def sample_antipodal(
     mask: np.ndarray | None,
     mu: float,
     gripper: ParallelJawGripper,
+    clearance: float = WIDTH_CLEARANCE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Antipodal candidate pairs: a surface point, a ray into the object within half the friction cone, and
-    the surface where it comes out, both on allowed faces and within the opening.
+    the surface where it comes out, both on allowed faces and at most the opening less ``clearance`` apart.
 
     Returns:
         centres (K, 3), closing axes (K, 3) from the first point to the second, widths (K,).
@@ -146,7 +152,7 @@ def sample_antipodal(
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     ray, face, t, _ = obj.caster.cast(points + 1e-5 * dirs, dirs)
     exits = (obj.face_normals[face] * dirs[ray]).sum(1) > math.cos(math.atan(mu))  # leaves through a facing side
-    ok = exits & (t < gripper.max_opening - 0.004) & (t > 0.002)
+    ok = exits & (t < gripper.max_opening - clearance) & (t > 0.002)
     if mask is not None:
         ok &= mask[face]
     ray, t = ray[ok], t[ok]
@@ -243,7 +249,9 @@ def plan_grasps(
 def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, gripper: ParallelJawGripper) -> list[Grasp]:
     """Grasps with both contacts on ``mask`` faces ((F,) bool; None = anywhere), best first."""
     rng = np.random.default_rng(config.seed)
-    centres, axes, widths = sample_antipodal(obj, config.candidates, rng, mask, config.mu, gripper)
+    centres, axes, widths = sample_antipodal(
+        obj, config.candidates, rng, mask, config.mu, gripper, config.width_clearance
+    )
     if not len(centres):
         return []
     approaches = _approaches(axes, config.approaches, rng)
@@ -266,6 +274,7 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     contacts = close_jaws(obj, poses, gripper)
     check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
     valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
+    valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
     epsilon = score_contacts(obj, contacts, poses, config.mu)
