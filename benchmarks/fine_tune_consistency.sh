@@ -4,8 +4,8 @@
 # (results/stability.md); its codes of two views of one object lie about 0.6 of the objects' spread apart. A further
 # stage from the shipped weights with --view-consistency-weight WEIGHT (each object also encodes a second view; the
 # codes' distance over their spread is the term) against the same stage without, side by side, one core each, the
-# same MINUTES (pass the steps each makes in them: the term's second encoder pass costs 15 % a step); then, side by
-# side, the shipped model and both stages' last checkpoints on 40 validation objects (val40) and their view
+# same MINUTES (pass the steps each makes in them: the term's second encoder pass costs 15 % a step), each given its
+# own mesh level (eval calibrate); then, side by side, the shipped model and both stages' last checkpoints on 40 validation objects (val40) and their view
 # stability on 16 validation objects (2 per category, 4 input views, as the test protocol), and one results file.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,7 +33,13 @@ if [ "${SKIP_TRAINING:-0}" != 1 ]; then
     timed_small_run plain "$PLAIN_STEPS" "${STAGE[@]}" &
     timed_small_run consistency "$CONSISTENCY_STEPS" "${STAGE[@]}" --view-consistency-weight "$WEIGHT" &
     wait
+    # each run's own mesh level, as the shipped model's (eval calibrate on 32 validation objects)
+    for name in plain consistency; do
+        .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu &
+    done
+    wait
 fi
+rm -rf "$W"/val40_* "$W"/stability_*
 val40 shipped "$SHIPPED" & val40 plain "$W/plain" & wait
 val40 consistency "$W/consistency" & stability16 shipped "$SHIPPED" & wait
 stability16 plain "$W/plain" & stability16 consistency "$W/consistency" & wait
