@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The shipped model's 2D tables on one lent GPU machine, in one command that fits a 10-minute slot (issue 12):
 # Table 2 at 200x150 (test split, 5 objects per category, 20 targets; affnerf, affnerf-fit, retrieval, constant),
-# the baselines' shared protocol (2 objects per category, 5 targets at 200x150) and view stability (first test object
-# of each category from 4 input-view sets, 10 targets at 100x75, meshes at 96^3): the protocols of
+# the baselines' shared protocol (2 objects per category, 5 targets at 200x150) and view stability (every test object
+# from 4 input-view sets, 10 targets at 100x75, meshes at 96^3): the protocols of
 # reproduce_tables.sh, one process per category side by side (objects are evaluated independently), each folder
 # merged afterwards by benchmarks/merge_eval.py. It first runs the CUDA-only tests. PROTOCOLS picks among those three;
 # UNSEEN="teapot=RUN1 scissors=RUN2" adds the unseen-category protocols of leave-one-category-out runs (the first 10
@@ -27,7 +27,7 @@ OBJECTS="${OBJECTS:-80}"    # objects per category (80: the dataset of every com
 WORKERS="${WORKERS:-16}"    # data generation processes
 CATS="${CATS:-screwdriver pen scissors eyeglasses bucket bottle cabinet teapot}"
 PROTOCOLS="${PROTOCOLS:-table2 base stability}"
-STABILITY_OBJECTS="${STABILITY_OBJECTS:-1}"  # test objects per category predicted from 4 input-view sets
+STABILITY_OBJECTS="${STABILITY_OBJECTS:-8}"  # test objects per category predicted from 4 input-view sets (8: all)
 UNSEEN="${UNSEEN:-}"
 mkdir -p "$W" "$OUT"
 T0=$(date +%s)

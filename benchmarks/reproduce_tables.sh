@@ -37,6 +37,11 @@ $A data generate --out "$W/data" --objects-per-category 80 --views 30 --workers 
 .venv/bin/torchrun --standalone --nproc_per_node "$NPROC" -m affnerf.cli.main train --data "$W/data" --out "$W/affnerf" \
     --config small --steps "$STEPS" --time-limit 100 --device "$DEVICE" --checkpoint-every 1000 --keep-checkpoints 4 \
     --val-every 0 $(resume "$W/affnerf")
+# then a further stage from those weights on one process (the committed run: one core, beside another run, 35 min;
+# benchmarks/results/fine_tune_consistency.md): a fresh Adam, 2e-4 -> 2e-5 over 19,000 steps
+$A train --data "$W/data" --out "$W/affnerf-stage2" --config small --steps 19000 --time-limit 40 --device "$DEVICE" \
+    --checkpoint-every 1000 --keep-checkpoints 4 --val-every 0 --init-from "$W/affnerf" --optim.lr 2e-4 \
+    --optim.lr-final 2e-5 $(resume "$W/affnerf-stage2")
 $A train --data "$W/data" --out "$W/pixelnerf-full" --config small $OLD_SMALL --steps "$PIX_STEPS" --time-limit 38 \
     --device "$DEVICE" --model.kind pixelnerf --input-views 3 $(resume "$W/pixelnerf-full")
 for kind_steps in $BASE_STEPS; do
@@ -56,8 +61,8 @@ for held in teapot scissors; do
 done
 
 # 3. the shipped model: mesh level and per-object optical depth from validation F-score (32 objects), then exported
-$A eval calibrate --run "$W/affnerf" --data "$W/data" --max-objects 32 --device "$DEVICE"
-.venv/bin/python -m affnerf.predict.shipped "$W/affnerf" src/affnerf/weights/affnerf-small.pt
+$A eval calibrate --run "$W/affnerf-stage2" --data "$W/data" --max-objects 32 --device "$DEVICE"
+.venv/bin/python -m affnerf.predict.shipped "$W/affnerf-stage2" src/affnerf/weights/affnerf-small.pt
 
 # mesh levels of the other runs, each on its own training categories' validation objects
 for run in pixelnerf semantic-ray gsnerf; do
@@ -93,11 +98,12 @@ done
 $A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method semantic-nerf --input-views 3 \
     --semantic-steps 200 --out "$B" $BASE
 
-# 4c. the per-object mesh level against one level for all (same grids), and view stability (4 input views per object)
+# 4c. the per-object mesh level against one level for all (same grids), and view stability (4 input views of every
+#     test object; the committed run: benchmarks/gpu_eval.sh on a lent GPU, 3.5 min there, hours on the CPU)
 .venv/bin/python benchmarks/mesh_level.py --checkpoint src/affnerf/weights/affnerf-small.pt --data "$W/data" \
     --out "$R/mesh_level"
 $A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method affnerf,affnerf-fit,retrieval \
-    --target-views 10 --scale 0.25 --max-objects 1 --mesh-resolution 96 --stability-views 4 --device "$DEVICE" \
+    --target-views 10 --scale 0.25 --max-objects 8 --mesh-resolution 96 --stability-views 4 --device "$DEVICE" \
     --out "$W/eval-stability"
 
 # 5. the per-object Semantic-NeRF (a NeRF fitted to each object), on the first test object of each category
