@@ -132,3 +132,26 @@ def test_no_grasp_says_the_narrowest_width_against_the_opening():
     grasps, why = _plan(obj, config, ParallelJawGripper(), "transforms.json scale")
     assert grasps == [] and why.startswith("no grasp found: the narrowest section of the 'grasp' surface is 0.1")
     assert "wider than the gripper's 0.080 m opening" in why
+
+
+def test_predicted_models_keep_their_own_width_clearance_and_no_grasp_names_it(tmp_path):
+    import trimesh
+
+    from affnerf.eval.grasps import GraspEvalConfig, _plan, condition_settings
+    from affnerf.grasp.gripper import ParallelJawGripper
+    from affnerf.grasp.planner import WIDTH_CLEARANCE, PlanConfig
+    from affnerf.grasp.refine import RefineConfig
+    from affnerf.grasp.target import GraspObject
+    from affnerf.vocab import affordance_id
+
+    config = GraspEvalConfig(run=tmp_path, data=tmp_path, out=tmp_path, predicted_clearance=0.02)
+    plan = PlanConfig(num=4, refine=RefineConfig(steps=0))
+    predicted = condition_settings(plan, "predicted", "grasp", config)
+    true = condition_settings(plan, "true", "none", config)
+    assert (predicted.affordance, predicted.width_clearance) == ("grasp", 0.02)
+    assert (true.affordance, true.width_clearance) == ("none", WIDTH_CLEARANCE)
+    body = trimesh.creation.cylinder(radius=0.034, height=0.2, sections=48)  # 0.068 m across: fits 0.08 - 0.004 only
+    obj = GraspObject(body.vertices, body.faces, np.full(len(body.faces), affordance_id("grasp")), "bottle")
+    assert _plan(obj, true, ParallelJawGripper(), "transforms.json scale")[0]
+    grasps, why = _plan(obj, predicted, ParallelJawGripper(), "transforms.json scale")
+    assert grasps == [] and "0.080 m opening (less 0.02 m clearance)" in why

@@ -191,6 +191,13 @@ def _condition(
     }
 
 
+def condition_settings(plan: PlanConfig, mesh: str, affordance: str, config: GraspEvalConfig) -> PlanConfig:
+    """The planner's settings for one condition: ``plan`` restricted to ``affordance`` (``none`` = the whole
+    surface), with ``config.predicted_clearance`` as the width clearance when ``mesh`` is ``predicted``."""
+    settings = replace(plan, affordance=affordance)
+    return replace(settings, width_clearance=config.predicted_clearance) if mesh == "predicted" else settings
+
+
 def evaluate_object(
     loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig, picture: Path | None = None
 ) -> dict[str, Any]:
@@ -224,9 +231,7 @@ def evaluate_object(
     for name, mesh in (("true", gt), ("predicted", predicted)):
         for surface, affordance in (("whole", "none"), ("part", task)):
             planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
-            cond, settings = f"{name}_{surface}", replace(plan, affordance=affordance)
-            if name == "predicted":
-                settings = replace(settings, width_clearance=config.predicted_clearance)
+            cond, settings = f"{name}_{surface}", condition_settings(plan, name, affordance, config)
             grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
             panels[cond] = (mesh, grasps)
     if picture is not None:
