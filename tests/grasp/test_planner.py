@@ -268,3 +268,13 @@ def test_a_wider_clearance_keeps_grasps_clear_of_the_opening():
     grasps = plan_grasps(obj, plan)
     assert grasps and all(0.069 < g.width <= 0.08 - 0.004 for g in grasps)
     assert plan_grasps(obj, PlanConfig(num=8, refine=RefineConfig(steps=0), width_clearance=0.015)) == []
+
+
+def test_a_mesh_predict_wrote_is_planned_with_the_predicted_clearance(tmp_path):
+    from affnerf.grasp.io import default_clearance
+    from affnerf.grasp.planner import PREDICTED_CLEARANCE, WIDTH_CLEARANCE
+
+    mesh = tmp_path / "affordance_model.ply"
+    assert default_clearance(mesh) == WIDTH_CLEARANCE  # a dataset or user mesh
+    (tmp_path / "prediction.json").write_text("{}")
+    assert default_clearance(mesh) == PREDICTED_CLEARANCE > WIDTH_CLEARANCE

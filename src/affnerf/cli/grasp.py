@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Literal
 
@@ -27,6 +28,7 @@ def plan(
     refine_steps: int = 40,
     seed: int = 0,
     part_margin: float | None = None,
+    width_clearance: float | None = None,
 ) -> None:
     """Plan parallel-jaw grasps on a mesh (PLY; with --affordance, one carrying an integer `affordance` property).
 
@@ -51,25 +53,24 @@ def plan(
         seed: random seed.
         part_margin: with --affordance, contacts keep this distance (m) from other labels, where a prediction's
             labels are least sure (default: grasp.planner.PART_MARGIN, 0.01; 0 = the whole part; conventions §6).
+        width_clearance: grasps stay this far (m) below --max-opening (default: 0.012 on a mesh `affnerf predict`
+            wrote, whose widths are uncertain, i.e. with a prediction.json beside it; else 0.004; conventions §6).
     """
-    from dataclasses import replace
-
     from affnerf.grasp.explain import no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper
-    from affnerf.grasp.io import plan_into, summary
-    from affnerf.grasp.planner import PlanConfig
+    from affnerf.grasp.io import default_clearance, plan_into, summary
+    from affnerf.grasp.planner import PART_MARGIN, PlanConfig, RefineConfig
     from affnerf.grasp.size import extent
     from affnerf.grasp.target import load_grasp_object
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
-    config = PlanConfig(affordance=affordance, num=num, candidates=candidates, seed=seed)
-    margin = config.part_margin if part_margin is None else part_margin
-    config = replace(config, refine=replace(config.refine, steps=refine_steps), part_margin=margin)
-    planned = plan_into(
-        out, canonical, mesh, config, ParallelJawGripper(max_opening=max_opening), object_size, category
-    )
-    source = planned.size.source
-    print(f"size: largest side {extent(planned.obj.vertices):.3f} m ({source}); poses in metres", file=sys.stderr)
+    config = PlanConfig(affordance, num, candidates, seed=seed, refine=RefineConfig(steps=refine_steps))
+    config = replace(config, part_margin=PART_MARGIN if part_margin is None else part_margin)
+    config = replace(config, width_clearance=default_clearance(mesh) if width_clearance is None else width_clearance)
+    gripper = ParallelJawGripper(max_opening=max_opening)
+    planned = plan_into(out, canonical, mesh, config, gripper, object_size, category)
+    size = f"{extent(planned.obj.vertices):.3f} m ({planned.size.source})"
+    print(f"size: largest side {size}; poses in metres", file=sys.stderr)
     if planned.no_grasp is not None:
         print(no_grasp_text(planned.no_grasp), file=sys.stderr)
     print(json.dumps(summary(planned.grasps)))

@@ -25,7 +25,7 @@ from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PART_MARGIN, WIDTH_CLEARANCE, Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.planner import PART_MARGIN, PREDICTED_CLEARANCE, Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.scoring import score_grasps
 from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
@@ -74,7 +74,8 @@ class GraspEvalConfig:
             :func:`~affnerf.predict.agreement.agreeing_faces`); 0 = off.
         predicted_clearance: on the predicted models, grasps stay this far (metres) below the gripper's opening
             (:class:`~affnerf.grasp.planner.PlanConfig` ``width_clearance``; a true mesh keeps the planner's
-            default), because a section the model makes too narrow may not fit the gripper on the true object.
+            default), because a section the model makes too narrow may not fit the gripper on the true object
+            (1.2 cm, chosen on validation objects: benchmarks/results/grasp_clearance.md).
     """
 
     run: Path
@@ -97,7 +98,7 @@ class GraspEvalConfig:
     part_margin: float = PART_MARGIN
     fit_steps: int = 30
     agreement_distance: float = AGREEMENT_DISTANCE
-    predicted_clearance: float = WIDTH_CLEARANCE
+    predicted_clearance: float = PREDICTED_CLEARANCE
 
 
 def predicted_object(

@@ -17,7 +17,7 @@ from affnerf.fileio import read_json_file, write_json_atomic
 from affnerf.grasp.camera_frame import camera_record
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.planner import PREDICTED_CLEARANCE, WIDTH_CLEARANCE, Grasp, PlanConfig, plan_grasps
 from affnerf.grasp.size import ObjectSize, extent, resolve_size, scaled
 from affnerf.grasp.target import GraspObject
 from affnerf.pictures.meshes import affordance_colors, coloured_surface, views_around
@@ -174,6 +174,12 @@ class PlannedGrasps:
     obj: GraspObject
     size: ObjectSize
     no_grasp: dict[str, Any] | None
+
+
+def default_clearance(mesh: Path) -> float:
+    """The width clearance to plan on ``mesh`` with: the predicted one for a mesh ``affnerf predict`` wrote (a
+    ``prediction.json`` beside it), the planner's default otherwise."""
+    return PREDICTED_CLEARANCE if (Path(mesh).parent / "prediction.json").is_file() else WIDTH_CLEARANCE
 
 
 def plan_into(

@@ -26,6 +26,9 @@ from affnerf.vocab import affordance_id
 #: Default ``part_margin`` of a restricted grasp, metres (benchmarks/results/grasp_margin.md).
 PART_MARGIN = 0.01
 WIDTH_CLEARANCE = 0.004  #: on a true mesh, grasps stay this far below the gripper's opening
+#: on a mesh predicted from one image, whose widths are uncertain (chosen on validation objects:
+#: benchmarks/results/grasp_clearance.md)
+PREDICTED_CLEARANCE = 0.012
 
 
 @dataclass(frozen=True)
