@@ -50,9 +50,11 @@ class PlanConfig:
             least reliable. Halved while that would leave nothing (:func:`shrink_part`), and when no grasp survives
             on what is left the whole part is planned on, so a margin never costs an object its grasps (0 = the
             whole part).
-        width_clearance: grasps are at most the gripper's opening less this wide (metres): a few millimetres on
-            an exact mesh; more on a mesh predicted from one image, whose widths are uncertain, so that a grasp
-            planned across a section the model made too narrow is not one the true object cannot fit.
+        width_clearance: sampled pairs are at most the gripper's opening less this far apart (metres). The
+            default 4 mm, for an exact mesh, bounds the pairs only (the local search may open a grasp up to the
+            full opening); a larger one, for a mesh predicted from one image whose widths are uncertain, also bounds
+            the final grasps, so that a grasp planned across a section the model made too narrow is not one the
+            true object cannot fit.
     """
 
     affordance: str = "none"
@@ -277,7 +279,8 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     contacts = close_jaws(obj, poses, gripper)
     check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
     valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
-    valid &= contacts.width <= gripper.max_opening - config.width_clearance
+    if config.width_clearance > WIDTH_CLEARANCE:  # a larger clearance also bounds the refined grasps
+        valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
     epsilon = score_contacts(obj, contacts, poses, config.mu)
