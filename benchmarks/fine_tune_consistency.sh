@@ -3,22 +3,18 @@
 # benchmarks/results/fine_tune_consistency.md). The retrained model's F@1cm spread over 4 input views rose to 0.13
 # (results/stability.md); its codes of two views of one object lie about 0.6 of the objects' spread apart. A further
 # stage from the shipped weights with --view-consistency-weight WEIGHT (each object also encodes a second view; the
-# codes' distance over their spread is the term) against the same stage without, side by side, one core each, the
-# same MINUTES (pass the steps each makes in them: the term's second encoder pass costs 15 % a step), each given its
-# own mesh level (eval calibrate); then, side by side, the shipped model and both stages' last checkpoints on 40 validation objects (val40) and their view
-# stability on 16 validation objects (2 per category, 4 input views, as the test protocol), and one results file.
+# codes' distance over their spread is the term) against the same stage without (benchmarks/further_stage.sh: side
+# by side, one core each, the same MINUTES; pass the steps each makes in them: the term's second encoder pass costs
+# 15 % a step), each given its own mesh level (eval calibrate); then, side by side, the shipped model and both
+# stages' last checkpoints on 40 validation objects (val40) and their view stability on 16 validation objects (2 per
+# category, 4 input views, as the test protocol), and one results file. SKIP_TRAINING=1 only evaluates.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
-W="${WORK:-benchmarks/.work/fine_tune_consistency}"
-MINUTES="${MINUTES:-36}"
-PLAIN_STEPS="${PLAIN_STEPS:-19000}"
-CONSISTENCY_STEPS="${CONSISTENCY_STEPS:-16000}"
-WEIGHT="${WEIGHT:-0.1}"
-export OMP_NUM_THREADS=1
+export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
+export WORK="${WORK:-benchmarks/.work/fine_tune_consistency}" MINUTES="${MINUTES:-36}"
+export PLAIN_STEPS="${PLAIN_STEPS:-19000}" OMP_NUM_THREADS=1
+W="$WORK"
 SHIPPED=src/affnerf/weights/affnerf-small.pt
-STAGE=(--init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$W/cache")
-LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 
@@ -29,10 +25,8 @@ stability16() {
 }
 
 if [ "${SKIP_TRAINING:-0}" != 1 ]; then
-    warm_cache "$W/cache"
-    timed_small_run plain "$PLAIN_STEPS" "${STAGE[@]}" &
-    timed_small_run consistency "$CONSISTENCY_STEPS" "${STAGE[@]}" --view-consistency-weight "$WEIGHT" &
-    wait
+    SCORE=0 benchmarks/further_stage.sh consistency "${CONSISTENCY_STEPS:-16000}" \
+        --view-consistency-weight "${WEIGHT:-0.1}"
     # each run's own mesh level, as the shipped model's (eval calibrate on 32 validation objects)
     for name in plain consistency; do
         .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu &

@@ -5,7 +5,7 @@
 # src/affnerf/weights/affnerf-small.pt, one core each, for the same MINUTES, each with a fresh Adam and a schedule
 # 2e-4 -> 2e-5 that ends when the minutes do (as the third stage of results/second_stage.md; pass the steps each
 # run makes in MINUTES side by side); then scores every checkpoint of both, and the shipped model, on the ladder's 16
-# validation objects. Used by the fine_tune_*.sh scripts.
+# validation objects (SCORE=0 skips the scoring). Used by the fine_tune_*.sh scripts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 NAME="$1"
@@ -26,6 +26,7 @@ warm_cache "$W/cache"
 timed_small_run plain "$PLAIN_STEPS" "${STAGE[@]}" &
 timed_small_run "$NAME" "$STEPS" "${STAGE[@]}" "$@" &
 wait
+[ "${SCORE:-1}" = 1 ] || exit 0  # SCORE=0: the caller scores the runs its own way
 score_runs plain "$NAME"
 .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_shipped.json" \
     --reference "$SHIPPED"
