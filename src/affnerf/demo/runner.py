@@ -15,7 +15,7 @@ from tqdm import tqdm
 
 from affnerf.demo.report import ExampleResult, write_report
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.io import plan_into
+from affnerf.grasp.io import default_clearance, plan_into
 from affnerf.grasp.planner import PlanConfig
 from affnerf.grasp.size import CATEGORY_SIZE, extent
 from affnerf.grasp.target import GraspObject
@@ -77,7 +77,7 @@ def demo_example(predictor: Predictor, image: Path, out: Path, config: DemoConfi
         present = set(summary["classes_present"])
         wanted = next((a for a in GRASP_AFFORDANCES if a in present), "none")
         category = image.stem if image.stem in CATEGORY_SIZE else None  # grasps at the category's typical size
-        plan = PlanConfig(affordance=wanted, num=config.grasps)
+        plan = PlanConfig(affordance=wanted, num=config.grasps, width_clearance=default_clearance(mesh_file))
         planned = plan_into(out / "grasps", canonical, mesh_file, plan, ParallelJawGripper(), category=category)
         grasp_png = "grasps/grasps.png" if planned.grasps else None
         grasps_info = {
