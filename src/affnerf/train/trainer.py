@@ -56,7 +56,7 @@ def learning_rate(config: TrainConfig, step: int) -> float:
 
     Example:
         >>> from pathlib import Path
-        >>> from affnerf.train.config import TrainConfig, check_options
+        >>> from affnerf.train.config import TrainConfig
         >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100)
         >>> learning_rate(c, 0), round(learning_rate(c, 50), 12), round(learning_rate(c, 100), 12)
         (0.0005, 0.000158113883, 5e-05)
