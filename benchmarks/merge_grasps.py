@@ -29,10 +29,8 @@ def main() -> None:
     ids = [o["object_id"] for o in objects]
     if len(set(ids)) != len(ids):
         raise SystemExit("merge_grasps: the parts share objects; merge runs of disjoint categories")
-    summary, context = (
-        summarise(objects),
-        merge_settings([json.loads((p / "grasp_metrics.json").read_text())["settings"] for p in args.parts]),
-    )
+    summary = summarise(objects)
+    context = merge_settings([json.loads((p / "grasp_metrics.json").read_text())["settings"] for p in args.parts])
     args.out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(args.out / "grasp_objects.json", objects)
     write_json_atomic(args.out / "grasp_metrics.json", {**summary, "settings": context})

@@ -54,7 +54,7 @@ def plan(
         part_margin: with --affordance, contacts keep this distance (m) from other labels, where a prediction's
             labels are least sure (default: grasp.planner.PART_MARGIN, 0.01; 0 = the whole part; conventions §6).
         width_clearance: grasps stay this far (m) below --max-opening (default: 0.012 on a mesh `affnerf predict`
-            wrote, whose widths are uncertain, i.e. with a prediction.json beside it; else 0.004; conventions §6).
+            wrote, whose widths are uncertain, i.e. with a prediction.json beside it; else 0; conventions §6).
     """
     from affnerf.grasp.explain import no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper

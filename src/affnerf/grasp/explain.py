@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PlanConfig, allowed_faces
+from affnerf.grasp.planner import PlanConfig, allowed_faces, widest_pair
 from affnerf.grasp.size import extent
 from affnerf.grasp.target import GraspObject
 from affnerf.vocab import AFFORDANCE_CLASSES, affordance_id
@@ -50,10 +50,10 @@ def _other_affordances(obj: GraspObject, wanted: str, mu: float) -> dict[str, fl
 
 
 def _advice(
-    width: float | None, fits: bool, others: dict[str, float], size: float, source: str, opening: float, clear: float
+    width: float | None, fits: bool, others: dict[str, float], size: float, source: str, widest: float, clear: float
 ) -> list[str]:
-    """What to change, most specific first (``opening`` the gripper's, ``clear`` the planner's width clearance)."""
-    fitting = sorted((w, name) for name, w in others.items() if w <= opening - clear)
+    """What to change, most specific first (``widest`` the widest pair planned, ``clear`` the opening less it)."""
+    fitting = sorted((w, name) for name, w in others.items() if w <= widest)
     advice = [f"--affordance {name} (narrowest {w:.3f} m)" for w, name in fitting]
     if not fits and width is not None:
         advice.append(f"a gripper opening of at least {width + clear:.3f} m (--max-opening)")
@@ -71,13 +71,14 @@ def explain_no_grasps(
     ``{"reason", "affordance", "narrowest_width", "max_opening", "other_affordances", "advice"}``."""
     width = narrowest_width(obj, allowed_faces(obj, config.affordance), config.mu)
     where = "the surface" if config.affordance == "none" else f"the {config.affordance!r} surface"
-    fits = width is not None and width <= gripper.max_opening - config.width_clearance
+    widest = widest_pair(gripper, config.width_clearance)
+    fits = width is not None and width <= widest
     if width is None:
         reason = f"no pair of facing sides found on {where}"
     elif not fits:
         reason = (
             f"the narrowest section of {where} is {width:.3f} m across, wider than the gripper's"
-            f" {gripper.max_opening:.3f} m opening (less {config.width_clearance} m clearance)"
+            f" {gripper.max_opening:.3f} m opening (less {round(gripper.max_opening - widest, 6)} m clearance)"
         )
     else:
         reason = f"sections of {where} fit the opening ({width:.3f} m) but every grasp collided or lost its contacts"
@@ -88,9 +89,7 @@ def explain_no_grasps(
         "narrowest_width": None if width is None else round(width, 4),
         "max_opening": gripper.max_opening,
         "other_affordances": others,
-        "advice": _advice(
-            width, fits, others, extent(obj.vertices), size_source, gripper.max_opening, config.width_clearance
-        ),
+        "advice": _advice(width, fits, others, extent(obj.vertices), size_source, widest, gripper.max_opening - widest),
     }
 
 

@@ -25,9 +25,12 @@ from affnerf.vocab import affordance_id
 
 #: Default ``part_margin`` of a restricted grasp, metres (benchmarks/results/grasp_margin.md).
 PART_MARGIN = 0.01
-WIDTH_CLEARANCE = 0.004  #: on a true mesh, grasps stay this far below the gripper's opening
-#: on a mesh predicted from one image, whose widths are uncertain (chosen on validation objects:
-#: benchmarks/results/grasp_clearance.md)
+#: Sampled antipodal pairs are always at least this much narrower than the gripper's opening, metres.
+PAIR_CLEARANCE = 0.004
+#: Default ``width_clearance``, for an exact mesh: nothing beyond the pairs' own clearance.
+WIDTH_CLEARANCE = 0.0
+#: ``width_clearance`` on a mesh predicted from one image, whose widths are uncertain (chosen on validation
+#: objects: benchmarks/results/grasp_clearance.md).
 PREDICTED_CLEARANCE = 0.012
 
 
@@ -50,11 +53,11 @@ class PlanConfig:
             least reliable. Halved while that would leave nothing (:func:`shrink_part`), and when no grasp survives
             on what is left the whole part is planned on, so a margin never costs an object its grasps (0 = the
             whole part).
-        width_clearance: sampled pairs are at most the gripper's opening less this far apart (metres). The
-            default 4 mm, for an exact mesh, bounds the pairs only (the local search may open a grasp up to the
-            full opening); a larger one, for a mesh predicted from one image whose widths are uncertain, also bounds
-            the final grasps, so that a grasp planned across a section the model made too narrow is not one the
-            true object cannot fit.
+        width_clearance: grasps, sampled pairs and refined grasps alike, are at most the gripper's opening less
+            this wide (metres; the pairs also keep :data:`PAIR_CLEARANCE`). 0 on an exact mesh (the local search may
+            open a grasp up to the full opening); more on a mesh predicted from one image, whose widths are
+            uncertain, so that a grasp planned across a section the model made too narrow is not one the true
+            object cannot fit.
     """
 
     affordance: str = "none"
@@ -133,6 +136,12 @@ def shrink_part(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, margi
     return part
 
 
+def widest_pair(gripper: ParallelJawGripper, clearance: float = WIDTH_CLEARANCE) -> float:
+    """The widest antipodal pair the planner samples, metres: the opening less ``clearance``, and never less than
+    :data:`PAIR_CLEARANCE` below it."""
+    return gripper.max_opening - max(PAIR_CLEARANCE, clearance)
+
+
 def sample_antipodal(
     obj: GraspObject,
     count: int,
@@ -143,7 +152,7 @@ def sample_antipodal(
     clearance: float = WIDTH_CLEARANCE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Antipodal candidate pairs: a surface point, a ray into the object within half the friction cone, and
-    the surface where it comes out, both on allowed faces and at most the opening less ``clearance`` apart.
+    the surface where it comes out, both on allowed faces and at most :func:`widest_pair` apart.
 
     Returns:
         centres (K, 3), closing axes (K, 3) from the first point to the second, widths (K,).
@@ -157,7 +166,7 @@ def sample_antipodal(
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     ray, face, t, _ = obj.caster.cast(points + 1e-5 * dirs, dirs)
     exits = (obj.face_normals[face] * dirs[ray]).sum(1) > math.cos(math.atan(mu))  # leaves through a facing side
-    ok = exits & (t < gripper.max_opening - clearance) & (t > 0.002)
+    ok = exits & (t < widest_pair(gripper, clearance)) & (t > 0.002)
     if mask is not None:
         ok &= mask[face]
     ray, t = ray[ok], t[ok]
@@ -279,8 +288,7 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     contacts = close_jaws(obj, poses, gripper)
     check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
     valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
-    if config.width_clearance > WIDTH_CLEARANCE:  # a larger clearance also bounds the refined grasps
-        valid &= contacts.width <= gripper.max_opening - config.width_clearance
+    valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
     epsilon = score_contacts(obj, contacts, poses, config.mu)
