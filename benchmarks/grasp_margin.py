@@ -130,8 +130,9 @@ def main() -> None:
         done = list(pool.map(lambda m: run_one(args, m), args.values))
     rows = [summarise(*d) for d in done]
     Path(args.results + ".json").write_text(json.dumps({"settings": vars(args), "rows": rows}, indent=1))
-    Path(args.results + ".md").write_text(markdown(rows, args.provenance, args.setting))
-    print(markdown(rows, args.provenance, args.setting))
+    report = markdown(rows, args.provenance, args.setting)
+    Path(args.results + ".md").write_text(report)
+    print(report)
 
 
 if __name__ == "__main__":
