@@ -2,7 +2,8 @@
 
 Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
 random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
-shadow, and each method's mask is compared with the true one. Also measured: the salient model's and (with
+shadow, and each method's mask is compared with the true one, also with a box around the object (``predict --box``:
+the true bounding box loosened by 5-25 % per side, seeded). Also measured: the salient model's and (with
 ``--segmenter``) a trained object segmenter's thresholds (sweeps over the same probability maps), GrabCut's
 refinement of either mask, and how well the segmenter's confidence and the methods' agreement flag a wrong mask.
 These six photographs are held out of the object segmenter's training
@@ -41,6 +42,9 @@ from affnerf.predict import salient, segment
 BACKGROUNDS = ("astronaut", "coffee", "chelsea", "rocket", "hubble_deep_field", "immunohistochemistry")
 CANVAS = (400, 300)
 THRESHOLDS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+#: ``--box`` rows: each side of the object's true bounding box moves out by this share of the box's size, drawn
+#: uniformly per side (a detector's or a hand-drawn box, loose by a margin the user did not measure).
+BOX_PADDING = (0.05, 0.25)
 
 
 def backgrounds() -> dict[str, np.ndarray]:
@@ -75,6 +79,30 @@ def composite(obj_rgb: np.ndarray, obj_mask: np.ndarray, bg: np.ndarray, shadow:
     patch[oy : oy + size[1], ox : ox + size[0]] = rgb
     out = np.clip(np.round(a * patch + (1 - a) * canvas), 0, 255).astype(np.uint8)
     return out, full > 127
+
+
+def padded_box(truth: np.ndarray, rng: np.random.Generator) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) of the true mask's bounding box, each side moved out by a random share (``BOX_PADDING``)
+    of the box's size, clipped to the image."""
+    rows, cols = np.flatnonzero(truth.any(1)), np.flatnonzero(truth.any(0))
+    bh, bw = rows[-1] - rows[0] + 1, cols[-1] - cols[0] + 1
+    left, top, right, bottom = rng.uniform(*BOX_PADDING, 4)
+    h, w = truth.shape
+    return (
+        max(0, int(cols[0] - left * bw)),
+        max(0, int(rows[0] - top * bh)),
+        min(w, int(cols[-1] + 1 + right * bw)),
+        min(h, int(rows[-1] + 1 + bottom * bh)),
+    )
+
+
+def measure_box(rgb: np.ndarray, truth: np.ndarray, box: tuple[int, int, int, int]) -> tuple[dict, dict]:
+    """IoU and seconds of ``auto`` and ``salient`` confined to a box around the object (``predict --box``)."""
+    iou, secs = {}, {}
+    for method in ("auto", "salient"):
+        seg, secs[f"{method} --box"] = timed(segment.segment, rgb, method, "composite", None, box)
+        iou[f"{method} --box"] = segment.mask_iou(seg.mask, truth)
+    return iou, secs
 
 
 def timed(fn, *args) -> tuple[Any, float]:
@@ -183,15 +211,15 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
     return out
 
 
-def score_photo(predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int, truth) -> dict:
-    """The prediction from ``photo`` (fitted to it for ``fit_steps`` first, as ``affnerf predict`` does; 0 = the
-    encoders' codes): its affordance mIoU at the object's ``targets`` views and its F@1cm against ``truth`` (the
-    object's :func:`affnerf.eval.surface.true_samples`)."""
+def score_photo(predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int, truth, box=None) -> dict:
+    """The prediction from ``photo`` (separated inside ``box`` when given; fitted to it for ``fit_steps`` first, as
+    ``affnerf predict`` does; 0 = the encoders' codes): its affordance mIoU at the object's ``targets`` views and its
+    F@1cm against ``truth`` (the object's :func:`affnerf.eval.surface.true_samples`)."""
     from affnerf.eval.surface import sample_seed, score_mesh
     from affnerf.metrics.segmentation import confusion_matrix, mean_iou
     from affnerf.predict.invert import InversionConfig
 
-    enc = predictor.encode_image(photo)
+    enc = predictor.encode_image(photo, box=box)
     if fit_steps > 0:
         predictor.fit(enc, InversionConfig(steps=fit_steps))
     n = len(predictor.classes)
@@ -201,25 +229,24 @@ def score_photo(predictor, obj: ObjectData, photo: Path, targets: list[int], fit
     return {"miou": mean_iou(conf), "fscore_1cm": surf["fscore_1cm"] if surf else 0.0}
 
 
-def predictions(
-    checkpoint: str, cases: list[tuple[ObjectData, int, np.ndarray]], tmp: Path, fit_steps: int
-) -> dict[str, Any]:
-    """mIoU at the other dataset views and F@1cm of predictions from the composite and from the clean render
-    (:func:`score_photo`)."""
+def predictions(checkpoint: str, cases: list[tuple], tmp: Path, fit_steps: int) -> dict[str, Any]:
+    """mIoU at the other dataset views and F@1cm of predictions from the composite (with no flags, and with
+    ``--box``) and from the clean render (:func:`score_photo`); ``cases``: (object, view, composite, box)."""
     from affnerf.eval.surface import true_samples
     from affnerf.predict.predictor import Predictor
     from affnerf.predict.shipped import shipped_model
 
     predictor = Predictor.load(Path(shipped_model() if checkpoint == "shipped" else checkpoint), "auto")
-    scores: dict[str, dict[str, list[float]]] = {k: {"miou": [], "fscore_1cm": []} for k in ("composite", "clean")}
-    for k, (obj, view, comp) in enumerate(cases):
-        paths = {"composite": tmp / f"c{k}.png", "clean": tmp / f"r{k}.png"}
-        Image.fromarray(comp).save(paths["composite"])
-        Image.fromarray(obj.rgb(view)).save(paths["clean"])
+    kinds = ("composite", "composite --box", "clean")
+    scores: dict[str, dict[str, list[float]]] = {k: {"miou": [], "fscore_1cm": []} for k in kinds}
+    for k, (obj, view, comp, box) in enumerate(cases):
+        photo, clean = tmp / f"c{k}.png", tmp / f"r{k}.png"
+        Image.fromarray(comp).save(photo)
+        Image.fromarray(obj.rgb(view)).save(clean)
         others = [i for i in range(len(obj.record.frames)) if i != view]
         truth = true_samples(obj, 0)
-        for kind, path in paths.items():
-            for metric, value in score_photo(predictor, obj, path, others, fit_steps, truth).items():
+        for kind, path, kind_box in zip(kinds, (photo, photo, clean), (None, box, None), strict=True):
+            for metric, value in score_photo(predictor, obj, path, others, fit_steps, truth, kind_box).items():
                 scores[kind][metric].append(value)
     return {
         "checkpoint": checkpoint,
@@ -255,6 +282,7 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "segmenter": None if args.segmenter is None else str(args.segmenter),
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
         "onnx_threads": salient.SESSION_THREADS,
+        "box_padding": BOX_PADDING,
     }
 
 
@@ -271,18 +299,22 @@ def main() -> None:
     if segmenter is not None:
         segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
+    box_rng = np.random.default_rng(args.seed + 1)  # its own stream: the composites stay those of earlier runs
     for k, idx in enumerate(picks):
         obj = ds.load_object(entries[idx])
         view = int(rng.integers(len(obj.record.frames)))
         shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
         iou, secs, extra = measure_one(rgb, truth, model)
+        box = padded_box(truth, box_rng)
+        boxed = measure_box(rgb, truth, box)
+        iou, secs = {**iou, **boxed[0]}, {**secs, **boxed[1]}
         if segmenter is not None:
             more = measure_segmenter(rgb, truth, segmenter, args.segmenter)
             iou, secs, extra = {**iou, **more[0]}, {**secs, **more[1]}, {**extra, **more[2]}
         rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
-                     "shadow": shadow, "iou": iou, "secs": secs, **extra})  # fmt: skip
-        cases.append((obj, view, rgb))
+                     "shadow": shadow, "box": box, "iou": iou, "secs": secs, **extra})  # fmt: skip
+        cases.append((obj, view, rgb, box))
         print(f"{k:3d} {obj.record.object_id:16s} {bg:22s} shadow={shadow!s:5s} "
               + " ".join(f"{m}={v:.3f}" for m, v in iou.items()))  # fmt: skip
     result = {

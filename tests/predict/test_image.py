@@ -157,3 +157,15 @@ def test_two_methods_that_disagree_make_a_doubtful_separation():
     record = sep.to_json()
     assert record["source"] == "salient" and record["agreement"] == 0.7 and record["compared_with"] == "grabcut"
     assert record["background_uniformity"] is None and record["note"] is None
+
+
+def test_a_box_confines_the_separation_and_is_recorded(tmp_path):
+    rgb = _photo()
+    rgb[5:15, 5:15] = (30, 30, 200)  # something else, outside the box
+    path = _save(tmp_path, "two.png", Image.fromarray(rgb))
+    prepared = prepare_image(path, 64, segment="uniform", box=(60, 20, 110, 70))
+    assert prepared.bbox == (70, 30, 100, 60) and not prepared.mask[:20].any()
+    assert prepared.separation.to_json()["box"] == [60, 20, 110, 70]
+    assert prepare_image(path, 64, segment="uniform").separation.to_json()["box"] is None
+    with pytest.raises(AffnerfError, match="two.png: --box 200 0 300 50 holds no pixel"):
+        prepare_image(path, 64, box=(200, 0, 300, 50))

@@ -239,6 +239,23 @@ def test_segment_none_and_bad_segment_values(trained_runs, photo, tmp_path, caps
     assert exit_info.value.code == 2 and "magic" in capsys.readouterr().err
 
 
+def test_a_box_is_recorded_and_one_without_pixels_is_exit_2_keeping_earlier_outputs(
+    trained_runs, photo, tmp_path, capsys
+):
+    out = tmp_path / "pred"
+    h, w = np.asarray(Image.open(photo["rgb"])).shape[:2]
+    box = ["--box", "0", "0", str(w), str(h)]
+    assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--fit-steps", "0", *box]) == 0
+    summary = json.loads((out / "prediction.json").read_text())
+    assert summary["separation"]["box"] == [0, 0, w, h] and summary["separation"]["source"] == "uniform background"
+    capsys.readouterr()
+    outside = ["--box", str(w + 5), "0", str(w + 50), "10"]
+    assert main(_tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), *outside]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "holds no pixel of the" in err and str(photo["rgb"]) in err
+    assert json.loads((out / "prediction.json").read_text()) == summary  # the earlier outputs are kept
+
+
 def test_segment_salient_without_the_extra_is_exit_2_naming_it(trained_runs, photo, tmp_path, capsys, monkeypatch):
     import sys
 

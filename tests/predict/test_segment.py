@@ -177,3 +177,38 @@ def test_the_segmenter_method_uses_the_given_file_and_records_its_confidence(tra
 def test_the_segmenter_method_without_a_file_is_an_error_saying_how_to_train_one():
     with pytest.raises(AffnerfError, match="needs a segmenter file: train one on your objects with `affnerf train"):
         segment.segment(_composite()[0], "segmenter")
+
+
+def _two_objects():
+    """The composite with a second red disc left of the object: a box around the object must leave it out."""
+    rgb, truth = _composite()
+    yy, xx = np.mgrid[: rgb.shape[0], : rgb.shape[1]]
+    distractor = ((yy - 40) / 25.0) ** 2 + ((xx - 40) / 25.0) ** 2 <= 1.0
+    rgb[distractor] = (210, 40, 30)
+    return rgb, truth & ~distractor
+
+
+@needs_opencv
+def test_a_box_confines_auto_to_grabcut_from_the_rectangle():
+    rgb, truth = _two_objects()
+    seg = segment.segment(rgb, "auto", box=(50, 40, 235, 200))
+    assert seg.source == "grabcut" and seg.box == (50, 40, 235, 200)
+    assert segment.mask_iou(seg.mask, truth) > 0.8
+    assert not seg.mask[:40].any() and not seg.mask[:, :50].any()  # nothing outside the box, the distractor left
+
+
+def test_a_box_runs_any_method_inside_it_and_is_clipped_to_the_image():
+    rgb = np.full((60, 80, 3), 250, np.uint8)
+    rgb[20:40, 30:50] = (10, 120, 200)
+    rgb[5:10, 5:10] = (10, 120, 200)  # a second object outside the box
+    seg = segment.segment(rgb, "uniform", box=(20, 15, 200, 200))
+    assert seg.source == "uniform background" and seg.box == (20, 15, 80, 60)
+    assert seg.mask.sum() == 400 and seg.mask[20:40, 30:50].all()
+    whole = segment.segment(rgb, "none", box=(30, 20, 50, 40))  # none: the whole box is the object
+    assert whole.mask.sum() == 400 and whole.mask[20:40, 30:50].all()
+
+
+@pytest.mark.parametrize("box", [(100, 0, 120, 10), (10, 10, 10, 30), (-20, -20, 0, 0)])
+def test_a_box_without_pixels_of_the_image_is_an_error_naming_the_image_and_the_bounds(box):
+    with pytest.raises(AffnerfError, match=r"photo.png: --box .* holds no pixel of the 80x60 image: .*X1 <= 80"):
+        segment.segment(np.zeros((60, 80, 3), np.uint8), "auto", "photo.png", box=box)

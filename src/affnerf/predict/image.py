@@ -31,6 +31,7 @@ from affnerf.errors import input_error
 from affnerf.predict.segment import (
     MIN_AGREEMENT,
     MIN_SEGMENTER_CONFIDENCE,
+    Box,
     Segmentation,
     SegmentMethod,
     background_uniformity,
@@ -69,6 +70,7 @@ class Separation:
         compared_with: the second method (``None`` when one ran).
         note: why ``auto`` fell back from the salient model (``None`` otherwise).
         confidence: the object segmenter's mean probability over its mask (``None`` for other methods).
+        box: the rectangle (x0, y0, x1, y1) the separation was confined to (``None``: the whole image).
     """
 
     source: str
@@ -80,6 +82,7 @@ class Separation:
     compared_with: str | None = None
     note: str | None = None
     confidence: float | None = None
+    box: Box | None = None
 
     @property
     def confident(self) -> bool:
@@ -97,6 +100,7 @@ class Separation:
             "agreement": None if self.agreement is None else round(self.agreement, 4),
             "compared_with": self.compared_with,
             "segmenter_confidence": None if self.confidence is None else round(self.confidence, 4),
+            "box": None if self.box is None else list(self.box),
             "note": self.note,
             "problems": list(self.problems),
         }
@@ -180,11 +184,11 @@ def measure_separation(rgb: np.ndarray, mask: np.ndarray, source: str, seg: Segm
     fraction, contact = float(mask.mean()), float(border_pixels(mask).mean())
     uniformity = background_uniformity(rgb) if source == "uniform background" else None
     agreement, compared, note = (seg.agreement, seg.compared_with, seg.note) if seg else (None, None, None)
-    confidence = seg.confidence if seg else None
+    confidence, box = (seg.confidence, seg.box) if seg else (None, None)
     problems = (
         () if source in TRUSTED_SOURCES else separation_problems(fraction, contact, uniformity, agreement, confidence)
     )
-    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note, confidence)
+    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note, confidence, box)
 
 
 def _mask_from_file(path: Path, size: tuple[int, int]) -> np.ndarray:
@@ -202,17 +206,23 @@ def _has_alpha(pil: Image.Image) -> bool:
 
 
 def separate(
-    pil: Image.Image, rgb: np.ndarray, image: Path, mask: Path | None, method: str, segmenter: Path | None = None
+    pil: Image.Image,
+    rgb: np.ndarray,
+    image: Path,
+    mask: Path | None,
+    method: str,
+    segmenter: Path | None = None,
+    box: Box | None = None,
 ) -> Segmentation:
     """The object mask of a photo: the mask file, else (for ``auto``) its alpha channel unless opaque, else
-    :func:`affnerf.predict.segment.segment` with ``method``."""
+    :func:`affnerf.predict.segment.segment` with ``method`` (inside ``box`` when given)."""
     if mask is not None:
         return Segmentation(_mask_from_file(Path(mask), (rgb.shape[1], rgb.shape[0])), "mask")
     if method == "auto" and _has_alpha(pil):
         alpha = np.asarray(pil.convert("RGBA").getchannel("A")) > 127
         if not alpha.all():  # an opaque alpha channel says nothing
             return Segmentation(alpha, "alpha")
-    return segment(rgb, method, str(image), segmenter)
+    return segment(rgb, method, str(image), segmenter, box)
 
 
 def prepare_image(
@@ -222,6 +232,7 @@ def prepare_image(
     mask: Path | None = None,
     segment: SegmentMethod = "auto",
     segmenter: Path | None = None,
+    box: Box | None = None,
 ) -> PreparedImage:
     """Load a photo and prepare it for the encoders.
 
@@ -242,12 +253,13 @@ def prepare_image(
     Raises:
         AffnerfError: naming the file, for a missing or unreadable image or mask, or an image with no object
             (blank, or one colour; an empty mask): see the module's notes on why that is an error; for
-            ``segment="salient"`` or ``"grabcut"`` without the optional extra ``affnerf[segment]``.
+            ``segment="salient"`` or ``"grabcut"`` without the optional extra ``affnerf[segment]``; a ``box`` that
+            holds no pixel of the image.
     """
     image = Path(image)
     pil = open_image(image)
     rgb = to_rgb8(pil)
-    seg = separate(pil, rgb, image, mask, segment, segmenter)
+    seg = separate(pil, rgb, image, mask, segment, segmenter, box)
     obj, source = seg.mask, seg.source
     if obj.mean() < MIN_OBJECT_FRACTION:
         what = "the mask is empty" if source == "mask" else "the image is blank or of one colour"

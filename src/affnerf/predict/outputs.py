@@ -58,6 +58,10 @@ class PredictConfig:
             written as ``mask.png``.
         segmenter: an object segmenter trained with ``affnerf train-segmenter`` on your own object families, for
             ``segment`` ``segmenter`` (required there) or ``auto`` (tried before the salient model).
+        box: X0 Y0 X1 Y1, the rectangle of the photo the object lies in (pixels from the top-left corner, X1 and
+            Y1 exclusive), as a detector or a drawn box gives it: ``segment`` runs inside it only, and everything
+            outside is background (``auto``: GrabCut from the box, the surest separation on a cluttered photo).
+            ``mask`` (or, for ``auto``, the image's alpha) still comes first.
         views: turntable views.
         width: turntable image width.
         height: turntable image height.
@@ -83,6 +87,7 @@ class PredictConfig:
     mask: Path | None = None
     segment: SegmentMethod = "auto"
     segmenter: Path | None = None
+    box: tuple[int, int, int, int] | None = None
     views: int = 12
     width: int = 200
     height: int = 150
@@ -218,7 +223,7 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
     A model that predicts no surface gives no mesh: the other files are written, ``mesh`` is ``None`` with a
     ``mesh_note`` saying why, and a one-line warning names the checkpoint and the image.
     """
-    obj = predictor.encode_image(config.image, config.mask, config.segment, config.segmenter)
+    obj = predictor.encode_image(config.image, config.mask, config.segment, config.segmenter, config.box)
     if config.fit_steps > 0:
         predictor.fit(obj, InversionConfig(steps=config.fit_steps), math.radians(config.fov))
     intr = Intrinsics.from_fov(config.width, config.height, DEFAULT_CAMERA_ANGLE_X)

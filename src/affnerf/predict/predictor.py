@@ -30,7 +30,7 @@ from affnerf.predict.image import PreparedImage, prepare_image
 from affnerf.predict.invert import InversionConfig, InversionResult, crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_surface
-from affnerf.predict.segment import SegmentMethod
+from affnerf.predict.segment import Box, SegmentMethod
 from affnerf.rendering.grid import OccupancyGrid
 
 
@@ -129,12 +129,18 @@ class Predictor:
         return self.loaded.model.encode(images.to(self.loaded.device))
 
     def encode_image(
-        self, image: Path, mask: Path | None = None, segment: SegmentMethod = "auto", segmenter: Path | None = None
+        self,
+        image: Path,
+        mask: Path | None = None,
+        segment: SegmentMethod = "auto",
+        segmenter: Path | None = None,
+        box: Box | None = None,
     ) -> EncodedObject:
         """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, which may use the object
-        segmenter file ``segmenter``; crop, centre, resize) and encode it."""
+        segmenter file ``segmenter``, inside the (x0, y0, x1, y1) rectangle ``box`` when given; crop, centre,
+        resize) and encode it."""
         size = self.loaded.model.config.encoder_resolution
-        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment, segmenter)
+        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment, segmenter, box)
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
 
     def fit(
