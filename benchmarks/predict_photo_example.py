@@ -7,7 +7,8 @@ model, ``--segment auto``). Each row of the picture shows the photo | ``DIR/mask
 ``DIR/turntable/000.png`` (the predicted object's front view: RGB | affordance overlay), with how predict
 separated the object and the mask's IoU against the true mask. The default rows are composite 2 (a bucket on the
 cat photograph, where the separation works) and composite 1 (a bottle on the coffee-cup photograph, where the cup
-is taken for the object: the common failure).
+is taken for the object: the common failure), then composite 1 again with ``--box`` (``--boxed 1``: the box
+``bench_segment.py`` drew for it, the true bounding box loosened by 5-25 % per side; drawn on the photo).
 
 Run::
 
@@ -33,18 +34,18 @@ from affnerf.predict.segment import mask_iou
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import BACKGROUNDS, backgrounds, composite  # noqa: E402
+from bench_segment import BACKGROUNDS, backgrounds, composite, padded_box  # noqa: E402
 
 #: Height in pixels of each panel of the picture.
 PANEL_HEIGHT = 200
-#: One composite: object id, background name, (H, W, 3) uint8 photo, (H, W) bool true mask.
-Case = tuple[str, str, np.ndarray, np.ndarray]
+#: One composite: object id, background name, (H, W, 3) uint8 photo, (H, W) bool true mask, bench_segment's box.
+Case = tuple[str, str, np.ndarray, np.ndarray, tuple[int, int, int, int]]
 
 
 def bench_composites(data: Path, wanted: list[int], seed: int = 0) -> dict[int, Case]:
-    """{k: (object id, background, rgb, true mask)} of composites ``wanted`` of ``bench_segment.py --seed seed``,
-    by replaying its random draws in its order."""
-    rng = np.random.default_rng(seed)
+    """{k: (object id, background, rgb, true mask, box)} of composites ``wanted`` of ``bench_segment.py --seed
+    seed``, by replaying its random draws in its order."""
+    rng, box_rng = np.random.default_rng(seed), np.random.default_rng(seed + 1)
     ds = Dataset.open(data)
     entries = ds.objects()
     picks = rng.permutation(len(entries))
@@ -55,8 +56,19 @@ def bench_composites(data: Path, wanted: list[int], seed: int = 0) -> dict[int, 
         view = int(rng.integers(len(obj.record.frames)))
         shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
+        box = padded_box(truth, box_rng)
         if k in wanted:
-            out[k] = (obj.record.object_id, bg, rgb, truth)
+            out[k] = (obj.record.object_id, bg, rgb, truth, box)
+    return out
+
+
+def with_box(photo: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+    """The photo with the box drawn on it (2 pixels of yellow inside its edges)."""
+    x0, y0, x1, y1 = box
+    out = photo.copy()
+    for sl in ((slice(y0, y0 + 2), slice(x0, x1)), (slice(y1 - 2, y1), slice(x0, x1)),
+               (slice(y0, y1), slice(x0, x0 + 2)), (slice(y0, y1), slice(x1 - 2, x1))):  # fmt: skip
+        out[sl] = (255, 220, 0)
     return out
 
 
@@ -71,7 +83,8 @@ def row(k: int, object_id: str, background: str, photo: np.ndarray, out: Path, i
     sep = summary["separation"]
     doubt = "confident" if sep["confident"] else "doubtful: warned on stderr"
     agreement = "" if sep["agreement"] is None else f", agreement with {sep['compared_with']} {sep['agreement']:.2f}"
-    caption = (f"composite {k}: {object_id} on skimage '{background}'  |  mask.png: {sep['source']}{agreement} "
+    boxed = "" if sep["box"] is None else f", --box {' '.join(map(str, sep['box']))}"
+    caption = (f"composite {k}{boxed}: {object_id} on skimage '{background}'  |  mask.png: {sep['source']}{agreement} "
                f"({doubt}); IoU with the true mask {iou:.2f}  |  turntable/000.png: RGB | affordance")  # fmt: skip
     ids = {AFFORDANCE_CLASSES.index(name) for name in summary["classes_present"]}
     space = np.full((8, body.shape[1], 3), 255, np.uint8)
@@ -82,23 +95,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
     parser.add_argument("--rows", type=int, nargs="+", default=[2, 1], help="composites of bench_segment.py")
+    parser.add_argument("--boxed", type=int, nargs="*", default=[1], help="composites also predicted with --box")
     parser.add_argument("--seed", type=int, default=0, help="bench_segment.py's --seed")
     parser.add_argument("--keep", type=Path, default=None, help="keep each photo.png and predict's folder here")
     parser.add_argument("--picture", type=Path, default=Path(__file__).parents[1] / "docs" / "predict_photo.png")
     args = parser.parse_args()
-    cases = bench_composites(args.data, args.rows, args.seed)
+    cases = bench_composites(args.data, args.rows + args.boxed, args.seed)
     rows, ids = [], set()
     with tempfile.TemporaryDirectory() as tmp:
-        for k in args.rows:
-            object_id, background, rgb, truth = cases[k]
-            work = (args.keep or Path(tmp)) / f"composite_{k}"
+        for k, boxed in [(k, False) for k in args.rows] + [(k, True) for k in args.boxed]:
+            object_id, background, rgb, truth, box = cases[k]
+            work = (args.keep or Path(tmp)) / f"composite_{k}{'_box' if boxed else ''}"
             work.mkdir(parents=True, exist_ok=True)
             photo, out = work / "photo.png", work / "out"
             Image.fromarray(rgb).save(photo)
             affnerf = Path(sys.executable).with_name("affnerf")
-            subprocess.run([str(affnerf), "predict", "--image", str(photo), "--out", str(out)], check=True)
+            flags = ["--box", *map(str, box)] if boxed else []
+            subprocess.run([str(affnerf), "predict", "--image", str(photo), "--out", str(out), *flags], check=True)
             iou = mask_iou(np.asarray(Image.open(out / "mask.png")) > 127, truth)
-            picture_row, classes = row(k, object_id, background, rgb, out, iou)
+            shown = with_box(rgb, box) if boxed else rgb
+            picture_row, classes = row(k, object_id, background, shown, out, iou)
             rows.append(picture_row)
             ids |= classes
             print(f"composite {k} ({object_id} on {background}): mask IoU {iou:.3f}")
