@@ -3,10 +3,10 @@
 Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
 random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
 shadow, and each method's mask is compared with the true one, also with a box around the object (``predict --box``:
-the true bounding box loosened by 5-25 % per side, seeded). Also measured: the salient model's and (with
-``--segmenter``) a trained object segmenter's thresholds (sweeps over the same probability maps), GrabCut's
-refinement of either mask, and how well the segmenter's confidence and the methods' agreement flag a wrong mask.
-These six photographs are held out of the object segmenter's training
+the true bounding box loosened by 5-25 % per side, and a tight one loosened by 0-5 %, seeded). Also measured: the
+salient model's and (with ``--segmenter``) a trained object segmenter's thresholds (sweeps over the same probability
+maps), GrabCut's refinement of either mask, and how well the segmenter's confidence and the methods' agreement
+flag a wrong mask. These six photographs are held out of the object segmenter's training
 (``affnerf.data.composite.HELD_OUT_BACKGROUNDS``), and the dataset below is made with another seed than the
 segmenter's training data, so its objects are new to it too.
 
@@ -45,6 +45,8 @@ THRESHOLDS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 #: ``--box`` rows: each side of the object's true bounding box moves out by this share of the box's size, drawn
 #: uniformly per side (a detector's or a hand-drawn box, loose by a margin the user did not measure).
 BOX_PADDING = (0.05, 0.25)
+#: ``--box`` (tight) rows: a detector's box, at most 5 % larger than the object per side.
+TIGHT_PADDING = (0.0, 0.05)
 
 
 def backgrounds() -> dict[str, np.ndarray]:
@@ -81,12 +83,14 @@ def composite(obj_rgb: np.ndarray, obj_mask: np.ndarray, bg: np.ndarray, shadow:
     return out, full > 127
 
 
-def padded_box(truth: np.ndarray, rng: np.random.Generator) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1) of the true mask's bounding box, each side moved out by a random share (``BOX_PADDING``)
-    of the box's size, clipped to the image."""
+def padded_box(
+    truth: np.ndarray, rng: np.random.Generator, padding: tuple[float, float] = BOX_PADDING
+) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) of the true mask's bounding box, each side moved out by a random share (``padding``) of
+    the box's size, clipped to the image."""
     rows, cols = np.flatnonzero(truth.any(1)), np.flatnonzero(truth.any(0))
     bh, bw = rows[-1] - rows[0] + 1, cols[-1] - cols[0] + 1
-    left, top, right, bottom = rng.uniform(*BOX_PADDING, 4)
+    left, top, right, bottom = rng.uniform(*padding, 4)
     h, w = truth.shape
     return (
         max(0, int(cols[0] - left * bw)),
@@ -96,12 +100,15 @@ def padded_box(truth: np.ndarray, rng: np.random.Generator) -> tuple[int, int, i
     )
 
 
-def measure_box(rgb: np.ndarray, truth: np.ndarray, box: tuple[int, int, int, int]) -> tuple[dict, dict]:
-    """IoU and seconds of ``auto`` and ``salient`` confined to a box around the object (``predict --box``)."""
+def measure_box(rgb: np.ndarray, truth: np.ndarray, boxes: dict[str, tuple[int, int, int, int]]) -> tuple[dict, dict]:
+    """IoU and seconds of ``auto`` and ``salient`` confined to each box around the object (``predict --box``),
+    as ``METHOD --box`` + the box's name."""
     iou, secs = {}, {}
-    for method in ("auto", "salient"):
-        seg, secs[f"{method} --box"] = timed(segment.segment, rgb, method, "composite", None, box)
-        iou[f"{method} --box"] = segment.mask_iou(seg.mask, truth)
+    for name, box in boxes.items():
+        for method in ("auto", "salient"):
+            key = f"{method} --box{name}"
+            seg, secs[key] = timed(segment.segment, rgb, method, "composite", None, box)
+            iou[key] = segment.mask_iou(seg.mask, truth)
     return iou, secs
 
 
@@ -283,6 +290,8 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
         "onnx_threads": salient.SESSION_THREADS,
         "box_padding": BOX_PADDING,
+        "tight_box_padding": TIGHT_PADDING,
+        "box_margin": segment.BOX_MARGIN,
     }
 
 
@@ -300,6 +309,7 @@ def main() -> None:
         segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
     box_rng = np.random.default_rng(args.seed + 1)  # its own stream: the composites stay those of earlier runs
+    tight_rng = np.random.default_rng(args.seed + 2)
     for k, idx in enumerate(picks):
         obj = ds.load_object(entries[idx])
         view = int(rng.integers(len(obj.record.frames)))
@@ -307,7 +317,7 @@ def main() -> None:
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
         iou, secs, extra = measure_one(rgb, truth, model)
         box = padded_box(truth, box_rng)
-        boxed = measure_box(rgb, truth, box)
+        boxed = measure_box(rgb, truth, {"": box, " (tight)": padded_box(truth, tight_rng, TIGHT_PADDING)})
         iou, secs = {**iou, **boxed[0]}, {**secs, **boxed[1]}
         if segmenter is not None:
             more = measure_segmenter(rgb, truth, segmenter, args.segmenter)

@@ -212,3 +212,14 @@ def test_a_box_runs_any_method_inside_it_and_is_clipped_to_the_image():
 def test_a_box_without_pixels_of_the_image_is_an_error_naming_the_image_and_the_bounds(box):
     with pytest.raises(AffnerfError, match=r"photo.png: --box .* holds no pixel of the 80x60 image: .*X1 <= 80"):
         segment.segment(np.zeros((60, 80, 3), np.uint8), "auto", "photo.png", box=box)
+
+
+@needs_opencv
+def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_separates():
+    rgb, truth = _two_objects()
+    rows, cols = np.flatnonzero(truth.any(1)), np.flatnonzero(truth.any(0))
+    tight = (int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1)  # a detector's box, no margin
+    seg = segment.segment(rgb, "auto", box=tight)
+    assert segment.mask_iou(seg.mask, truth) > 0.8 and seg.mask.sum() > 0.9 * truth.sum()
+    whole = segment.segment(*_composite()[:1], "auto", box=(0, 0, 320, 240))  # no pixel left around the box
+    assert whole.source == "grabcut" and segment.mask_iou(whole.mask, _composite()[1]) > 0.8
