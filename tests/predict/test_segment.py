@@ -221,5 +221,5 @@ def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_s
     tight = (int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1)  # a detector's box, no margin
     seg = segment.segment(rgb, "auto", box=tight)
     assert segment.mask_iou(seg.mask, truth) > 0.8 and seg.mask.sum() > 0.9 * truth.sum()
-    whole = segment.segment(*_composite()[:1], "auto", box=(0, 0, 320, 240))  # no pixel left around the box
+    whole = segment.segment(*_composite()[:1], "auto", box=(0, 0, 320, 240))  # the box is the whole image
     assert whole.source == "grabcut" and segment.mask_iou(whole.mask, _composite()[1]) > 0.8
