@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+import trimesh
 from scipy import sparse
 
 from affnerf.bench.environment import describe_machine
@@ -38,27 +39,10 @@ from affnerf.eval.calibrate import calibration_objects, input_views
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.surface import sample_seed, score_mesh, true_samples
 from affnerf.meshio import LabelledMesh, majority_face_labels
+from affnerf.predict.invert import point_labels
 from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model
 from affnerf.predict.mesh import evaluate_grid, marching_cubes
-
-
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(V, 3) unit normals: the area-weighted sum of the normals of each vertex's faces (right-hand winding);
-    a vertex on no face gets (0, 0, 0).
-
-    Example:
-        >>> v = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
-        >>> vertex_normals(v, np.array([[0, 1, 2]])).tolist()
-        [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]
-    """
-    a, b, c = (vertices[faces[:, k]] for k in range(3))
-    face_n = np.cross(b - a, c - a)  # length = twice the area: area weighting for free
-    normals = np.zeros_like(vertices, dtype=np.float64)
-    for k in range(3):
-        np.add.at(normals, faces[:, k], face_n)
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
 
 
 def neighbour_mean_operator(faces: np.ndarray, count: int) -> sparse.csr_matrix:
@@ -113,14 +97,12 @@ def parse() -> argparse.Namespace:
 
 @torch.no_grad()
 def probabilities(model, encoding, points: np.ndarray, chunk: int = 32768) -> np.ndarray:
-    """(N, C) softmax of the fine field's object-class logits at (N, 3) points."""
-    field = model.fine if model.fine is not None else model.coarse
-    out = []
-    for s in range(0, len(points), chunk):
-        p = torch.from_numpy(points[s : s + chunk]).float()
-        rays = torch.arange(len(p))
-        cond = model.condition(encoding, torch.zeros(len(p), dtype=torch.long))(p, rays)[0]
-        out.append(torch.softmax(field.geometry(p, cond)[1], dim=-1).numpy())
+    """(N, C) softmax of the field's object-class logits (:func:`affnerf.predict.invert.point_labels`) at (N, 3)
+    points."""
+    out = [
+        torch.softmax(point_labels(model, encoding, torch.from_numpy(points[s : s + chunk]).float()), dim=-1).numpy()
+        for s in range(0, len(points), chunk)
+    ]
     return np.concatenate(out)
 
 
@@ -136,7 +118,7 @@ def labelled(vertices: np.ndarray, faces: np.ndarray, probs: np.ndarray) -> Labe
 
 def rule_probabilities(model, encoding, vertices, faces, depths, smooth) -> dict[str, np.ndarray]:
     """Each rule's (V, C) vertex probabilities."""
-    normals = vertex_normals(vertices, faces)
+    normals = np.asarray(trimesh.Trimesh(vertices, faces, process=False).vertex_normals)  # outward
     at = probabilities(model, encoding, vertices)
     rules = {"vertex (today)": at}
     inward = {}
