@@ -1,6 +1,7 @@
 """Choose a planner setting of ``affnerf eval grasp`` on validation objects (issue 13): the part margin
-(``--part-margin``, ``PlanConfig.part_margin``) or the width clearance on predicted models (``--predicted-clearance``,
-``PlanConfig.width_clearance``).
+(``--part-margin``, ``PlanConfig.part_margin``), the width clearance on predicted models (``--predicted-clearance``,
+``PlanConfig.width_clearance``) or the least label confidence of restricted grasps on predicted models
+(``--min-confidence``, ``PlanConfig.min_confidence``).
 
 Runs ``affnerf eval grasp`` on the validation split (no pictures; no physics unless ``--lift``) once per value, two
 runs at a time on one thread each, and tabulates, per value, the share of task-part grasps with both contacts on the
@@ -14,6 +15,8 @@ Usage::
         --values 0 0.005 0.01 0.015 0.02 --max-objects 5
     python benchmarks/grasp_margin.py --data DATA --out benchmarks/.work/clearance --setting predicted-clearance \
         --values 0.004 0.015 0.025 --lift --results benchmarks/results/grasp_clearance
+    python benchmarks/grasp_margin.py --data DATA --out benchmarks/.work/confidence --setting min-confidence \
+        --values 0 0.8 0.9 0.95 --results benchmarks/results/grasp_confidence
 """
 
 from __future__ import annotations
@@ -32,7 +35,10 @@ PHYSICS_CONDITIONS = ("true_whole", "true_part", "predicted_whole", "predicted_p
 TITLES = {
     "part-margin": "Part margin of restricted grasps",
     "predicted-clearance": "Width clearance on predicted models",
+    "min-confidence": "Least label confidence of restricted grasps on predicted models",
 }
+#: Unit of each setting's values in the tables.
+UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": ""}
 
 
 def run_one(args: argparse.Namespace, margin: float) -> tuple[float, Path, float | None]:
@@ -83,8 +89,8 @@ def markdown(rows: list[dict], provenance: str, setting: str = "part-margin") ->
     for cond, title in (("predicted_part", "predicted from one image"), ("true_part", "true mesh")):
         lines += [f"**Share of task-part grasps with both contacts on the true task part, {title}**", ""]
         common = [k for k in cats if all(r[cond]["on_part_share"][k] is not None for r in rows)]
-        name = setting.replace("-", " ")
-        lines += [f"| {name} (m) | " + " | ".join(cats) + " | mean | mean, same categories | objects without grasps"]
+        name = setting.replace("-", " ") + UNITS[setting]
+        lines += [f"| {name} | " + " | ".join(cats) + " | mean | mean, same categories | objects without grasps"]
         lines[-1] += " | ε ratio |"
         lines += ["| --- " * (len(cats) + 5) + "|"]
         for r in rows:
@@ -105,7 +111,8 @@ def physics_markdown(rows: list[dict], setting: str) -> list[str]:
         return []
     conds = list(rows[0]["physics"])
     lines = ["**Physics: lift / lift-and-disturb success of the best grasps (mean over categories with grasps)**", ""]
-    lines += [f"| {setting.replace('-', ' ')} (m) | " + " | ".join(c.replace("_", ", ") for c in conds) + " |"]
+    name = setting.replace("-", " ") + UNITS[setting]
+    lines += [f"| {name} | " + " | ".join(c.replace("_", ", ") for c in conds) + " |"]
     lines += ["| --- " * (len(conds) + 1) + "|"]
     for r in rows:
         cells = [f"{_pct(r['physics'][c]['lift_success'])} / {_pct(r['physics'][c]['disturb_success'])}" for c in conds]

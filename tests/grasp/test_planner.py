@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -11,7 +12,15 @@ import trimesh
 
 from affnerf.cli.main import main
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PlanConfig, collides, part_masks, plan_grasps, sample_antipodal, shrink_part
+from affnerf.grasp.planner import (
+    PlanConfig,
+    collides,
+    part_masks,
+    plan_grasps,
+    sample_antipodal,
+    shrink_part,
+    trusted_part,
+)
 from affnerf.grasp.refine import RefineConfig, grasp_energy, refine_grasps
 from affnerf.grasp.target import GraspObject
 from affnerf.meshio import LabelledMesh, write_labelled_ply
@@ -116,6 +125,31 @@ def test_a_confirmed_patch_without_grasps_falls_back_to_the_whole_part(screwdriv
     assert not any(np.array_equal(a, b) for i, a in enumerate(masks) for b in masks[i + 1 :])  # none planned twice
     grasps = plan_grasps(obj, PlanConfig(affordance="grasp", num=4, refine=RefineConfig(steps=0)))
     assert grasps and all(g.affordance == ["grasp", "grasp"] for g in grasps)
+
+
+def test_restricted_grasps_go_first_where_the_field_is_sure_of_the_part(screwdriver):
+    centre_x = screwdriver.vertices[screwdriver.faces].mean(axis=1)[:, 0]
+    confidence = np.where(centre_x < -0.15, 0.95, 0.6)  # the handle's far end is the sure part
+    obj = GraspObject(
+        screwdriver.vertices, screwdriver.faces, screwdriver.face_affordance, "screwdriver", None, confidence
+    )
+    config = PlanConfig(affordance="grasp", num=8, refine=RefineConfig(steps=0), part_margin=0.0, min_confidence=0.8)
+    grasps = plan_grasps(obj, config)
+    assert grasps and max(g.contacts[:, 0].max() for g in grasps) < -0.15 + 0.005
+    unsure = plan_grasps(obj, replace(config, min_confidence=PlanConfig().min_confidence))  # the default: off
+    assert max(g.contacts[:, 0].max() for g in unsure) > -0.15
+
+
+def test_the_vouched_part_needs_both_agreement_and_confidence_where_the_mesh_has_them():
+    part = np.array([True, True, True, True, False])
+    agrees = np.array([True, True, False, True, True])
+    confidence = np.array([0.9, 0.5, 0.9, 0.8, 0.9])
+    obj = GraspObject(np.zeros((3, 3)), np.zeros((5, 3), np.int64), None, "m", agrees, confidence)
+    assert trusted_part(obj, part, 0.8).tolist() == [True, False, False, True, False]  # 0.8 itself passes
+    assert trusted_part(obj, part, 0.0).tolist() == [True, True, False, True, False]
+    assert trusted_part(replace(obj, face_agrees=None), part, 0.95) is None  # nothing that sure
+    assert trusted_part(replace(obj, face_agrees=None), part, 0.4) is None  # the whole part: no first try
+    assert trusted_part(replace(obj, face_agrees=None, face_confidence=None), part, 0.8) is None
 
 
 def test_planned_grasps_are_valid_and_collision_free(screwdriver):

@@ -9,10 +9,10 @@ import numpy as np
 import torch
 import trimesh
 
-from affnerf.meshio import majority_face_labels
+from affnerf.meshio import LabelledMesh, majority_face_labels
 from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model
-from affnerf.predict.mesh import class_areas, evaluate_grid, extract_labelled_mesh, model_surface
+from affnerf.predict.mesh import class_areas, evaluate_grid, extract_labelled_mesh, face_confidence, model_surface
 
 
 def _sphere(radius: float, sharpness: float = 0.01):
@@ -62,3 +62,23 @@ def test_an_objects_own_level_is_the_one_the_mesh_is_cut_at(trained_runs):
     assert model_surface(model, codes, resolution=20, level=0.7)[1] == 0.7
     model.config = replace(model.config, surface_optical_depth=0.0)
     assert model_surface(model, codes, resolution=20)[1] == 2.0
+
+
+def test_a_models_mesh_says_how_sure_the_field_is_of_each_faces_label(trained_runs):
+    model = load_model(trained_runs["affnerf"], "cpu").model
+    model.config = replace(model.config, surface_density=1.0, surface_optical_depth=0.0)
+    codes = model.encode(torch.rand(1, 3, model.config.encoder_resolution, model.config.encoder_resolution))
+    mesh, _ = model_surface(model, codes, resolution=20)
+    assert len(mesh.faces), "the tiny run's field should reach the level somewhere"
+    confidence = mesh.face_props["confidence"]
+    centres = torch.from_numpy(mesh.vertices[mesh.faces].mean(axis=1)).float()
+    p = model.point_probabilities(codes)(centres).detach().numpy()
+    own = p[np.arange(len(p)), mesh.face_props["affordance"].astype(int) - 1]
+    assert confidence.dtype == np.uint8 and np.all(np.abs(confidence - own * 100) <= 1.0)
+
+
+def test_face_confidence_reads_the_probability_of_each_faces_own_label():
+    vertices = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    mesh = LabelledMesh(vertices, np.array([[0, 1, 2], [1, 3, 2]]), face_props={"affordance": np.array([1, 3])})
+    probabilities = lambda p: torch.tensor([0.8, 0.15, 0.05]).expand(len(p), 3)  # noqa: E731
+    assert face_confidence(mesh, probabilities).tolist() == [80, 5]

@@ -29,6 +29,7 @@ def plan(
     seed: int = 0,
     part_margin: float | None = None,
     width_clearance: float | None = None,
+    min_confidence: float | None = None,
 ) -> None:
     """Plan parallel-jaw grasps on a mesh (PLY; with --affordance, one carrying an integer `affordance` property).
 
@@ -55,17 +56,21 @@ def plan(
             labels are least sure (default: grasp.planner.PART_MARGIN, 0.01; 0 = the whole part; conventions §6).
         width_clearance: grasps stay this far (m) below --max-opening (default: 0.012 on a mesh `affnerf predict`
             wrote, whose widths are uncertain, i.e. with a prediction.json beside it; else 0; conventions §6).
+        min_confidence: with --affordance, on a mesh whose faces carry `confidence` (a predicted one), contacts are
+            first sought on the part's faces at least this sure of their label, then on the whole part (default:
+            0, off: on validation objects 0.7-0.9 cost lift-and-disturb; conventions §6).
     """
     from affnerf.grasp.explain import no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import default_clearance, plan_into, summary
-    from affnerf.grasp.planner import PART_MARGIN, PlanConfig, RefineConfig
+    from affnerf.grasp.planner import MIN_CONFIDENCE, PART_MARGIN, PlanConfig, RefineConfig
     from affnerf.grasp.size import extent
     from affnerf.grasp.target import load_grasp_object
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance, num, candidates, seed=seed, refine=RefineConfig(steps=refine_steps))
     config = replace(config, part_margin=PART_MARGIN if part_margin is None else part_margin)
+    config = replace(config, min_confidence=MIN_CONFIDENCE if min_confidence is None else min_confidence)
     config = replace(config, width_clearance=default_clearance(mesh) if width_clearance is None else width_clearance)
     gripper = ParallelJawGripper(max_opening=max_opening)
     planned = plan_into(out, canonical, mesh, config, gripper, object_size, category)

@@ -25,7 +25,14 @@ from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.explain import explain_no_grasps
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.planner import PART_MARGIN, PREDICTED_CLEARANCE, Grasp, PlanConfig, plan_grasps
+from affnerf.grasp.planner import (
+    MIN_CONFIDENCE,
+    PART_MARGIN,
+    PREDICTED_CLEARANCE,
+    Grasp,
+    PlanConfig,
+    plan_grasps,
+)
 from affnerf.grasp.scoring import score_grasps
 from affnerf.grasp.size import ObjectSize, extent, object_mass, scaled, size_for
 from affnerf.grasp.target import GraspObject
@@ -76,6 +83,11 @@ class GraspEvalConfig:
             (:class:`~affnerf.grasp.planner.PlanConfig` ``width_clearance``; a true mesh keeps the planner's
             default), because a section the model makes too narrow may not fit the gripper on the true object
             (1.2 cm, chosen on validation objects: benchmarks/results/grasp_clearance.md).
+        min_confidence: in the task-part conditions on the predicted models, contacts are first sought on the
+            faces of the part whose label the field gives at least this probability (and that the encoder's own
+            prediction confirms); then on the whole part (:class:`~affnerf.grasp.planner.PlanConfig`; 0 = off, the
+            default: on validation objects 0.7-0.9 raised the on-part share by 0-2 points and cost lift-and-disturb
+            8-13 points, benchmarks/results/grasp_confidence.md).
     """
 
     run: Path
@@ -99,6 +111,7 @@ class GraspEvalConfig:
     fit_steps: int = 30
     agreement_distance: float = AGREEMENT_DISTANCE
     predicted_clearance: float = PREDICTED_CLEARANCE
+    min_confidence: float = MIN_CONFIDENCE
 
 
 def predicted_object(
@@ -218,7 +231,9 @@ def evaluate_object(
         size.factor,
     )
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
-    plan = PlanConfig(num=config.num, seed=config.seed, part_margin=config.part_margin)
+    plan = PlanConfig(
+        num=config.num, seed=config.seed, part_margin=config.part_margin, min_confidence=config.min_confidence
+    )
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))
     result: dict[str, Any] = {
         "object_id": obj.record.object_id,

@@ -25,6 +25,9 @@ from affnerf.vocab import affordance_id
 
 #: Default ``part_margin`` of a restricted grasp, metres (benchmarks/results/grasp_margin.md).
 PART_MARGIN = 0.01
+#: Default ``min_confidence`` of a restricted grasp: 0, off (0.7-0.9 cost lift-and-disturb on validation objects,
+#: benchmarks/results/grasp_confidence.md).
+MIN_CONFIDENCE = 0.0
 #: Sampled antipodal pairs are always at least this much narrower than the gripper's opening, metres.
 PAIR_CLEARANCE = 0.004
 #: Default ``width_clearance``, for an exact mesh: nothing beyond the pairs' own clearance.
@@ -58,6 +61,9 @@ class PlanConfig:
             open a grasp up to the full opening); more on a mesh predicted from one image, whose widths are
             uncertain, so that a grasp planned across a section the model made too narrow is not one the true
             object cannot fit.
+        min_confidence: with ``affordance``, on a mesh whose faces say how sure its predicting field is of their
+            labels (``GraspObject.face_confidence``), contacts are first sought on the faces of the part at least
+            this sure (and confirmed, where the mesh has a second prediction); then on the whole part. 0 = off.
     """
 
     affordance: str = "none"
@@ -71,6 +77,7 @@ class PlanConfig:
     collision_tolerance: float = 0.001
     part_margin: float = PART_MARGIN
     width_clearance: float = WIDTH_CLEARANCE
+    min_confidence: float = MIN_CONFIDENCE
 
 
 @dataclass
@@ -230,14 +237,26 @@ def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, ang
     return kept
 
 
-def part_masks(obj: GraspObject, part: np.ndarray, margin: float) -> list[np.ndarray]:
-    """The (F,) bool surfaces a restricted grasp is planned on, in turn until one yields grasps: where the object
-    has a second prediction (``obj.face_agrees``), the faces of ``part`` it confirms, shrunk by ``margin``
-    (:func:`shrink_part`), then whole; then ``part`` shrunk, then whole. A repeated mask is left out.
+def trusted_part(obj: GraspObject, part: np.ndarray, min_confidence: float) -> np.ndarray | None:
+    """(F,) bool faces of ``part`` whose labels the mesh vouches for: confirmed by a second prediction
+    (``obj.face_agrees``) and at least ``min_confidence`` sure (``obj.face_confidence``), each where the mesh has
+    it; None when it has neither, or when no face (or every face) of the part passes."""
+    trusted = part.copy()
+    if obj.face_agrees is not None:
+        trusted &= obj.face_agrees
+    if obj.face_confidence is not None and min_confidence > 0:
+        trusted &= obj.face_confidence >= min_confidence - 1e-9
+    return trusted if trusted.any() and not np.array_equal(trusted, part) else None
+
+
+def part_masks(obj: GraspObject, part: np.ndarray, margin: float, min_confidence: float = 0.0) -> list[np.ndarray]:
+    """The (F,) bool surfaces a restricted grasp is planned on, in turn until one yields grasps: the faces of
+    ``part`` the mesh vouches for (:func:`trusted_part`), shrunk by ``margin`` (:func:`shrink_part`), then whole;
+    then ``part`` shrunk, then whole. A repeated mask is left out.
     """
     tried: list[np.ndarray] = []
-    agreed = part & obj.face_agrees if obj.face_agrees is not None else None
-    for base in ([agreed] if agreed is not None and agreed.any() else []) + [part]:
+    trusted = trusted_part(obj, part, min_confidence)
+    for base in ([trusted] if trusted is not None else []) + [part]:
         for mask in (shrink_part(obj.vertices, obj.faces, base, margin), base):
             if not any(np.array_equal(mask, t) for t in tried):
                 tried.append(mask)
@@ -248,12 +267,12 @@ def plan_grasps(
     obj: GraspObject, config: PlanConfig = PlanConfig(), gripper: ParallelJawGripper = ParallelJawGripper()
 ) -> list[Grasp]:
     """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). Restricted to a
-    part, on the first of :func:`part_masks` where any survive (the part confirmed by a second prediction, the
-    part shrunk by the margin, the whole part)."""
+    part, on the first of :func:`part_masks` where any survive (the part the mesh vouches for, the part shrunk by
+    the margin, the whole part)."""
     part = allowed_faces(obj, config.affordance)
     if part is None:
         return _plan_on(obj, None, config, gripper)
-    for mask in part_masks(obj, part, config.part_margin):
+    for mask in part_masks(obj, part, config.part_margin, config.min_confidence):
         grasps = _plan_on(obj, mask, config, gripper)
         if grasps:
             return grasps

@@ -130,9 +130,11 @@ def resolve_size(mesh_path: Path, vertices: np.ndarray, object_size: float | Non
 
 
 def scaled(obj: GraspObject, factor: float) -> GraspObject:
-    """The object with vertices (V, 3) multiplied by ``factor`` about the origin (labels, agreement and name
-    kept)."""
-    return GraspObject(obj.vertices * factor, obj.faces, obj.face_affordance, obj.name, obj.face_agrees)
+    """The object with vertices (V, 3) multiplied by ``factor`` about the origin (labels, agreement, confidence and
+    name kept)."""
+    return GraspObject(
+        obj.vertices * factor, obj.faces, obj.face_affordance, obj.name, obj.face_agrees, obj.face_confidence
+    )
 
 
 def rescale_poses(poses: np.ndarray, factor: float) -> np.ndarray:

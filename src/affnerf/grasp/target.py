@@ -28,6 +28,10 @@ class GraspObject:
         face_agrees: (F,) bool faces whose label a second prediction of the object confirms (the mesh's face
             property ``confirmed``, :func:`affnerf.predict.agreement.confirmed`; a task part is planned on those
             first), or None.
+        face_confidence: (F,) how sure the predicting field is of each face's label, in [0, 1] (the mesh's face
+            property ``confidence`` in percent, :func:`affnerf.predict.mesh.face_confidence`; a task part is
+            planned first on the faces at least :attr:`~affnerf.grasp.planner.PlanConfig.min_confidence` sure),
+            or None.
     """
 
     vertices: np.ndarray
@@ -35,22 +39,26 @@ class GraspObject:
     face_affordance: np.ndarray | None = None
     name: str = "mesh"
     face_agrees: np.ndarray | None = None
+    face_confidence: np.ndarray | None = None
     _caster: RayCaster | None = field(default=None, repr=False)
 
     @classmethod
     def from_mesh(cls, mesh: LabelledMesh, name: str = "mesh") -> GraspObject:
         """From a labelled mesh: per-face ``affordance`` if present, else the majority of its vertices'; the face
-        property ``confirmed``, when present, as :attr:`face_agrees`."""
+        properties ``confirmed`` and ``confidence`` (percent), when present, as :attr:`face_agrees` and
+        :attr:`face_confidence`."""
         labels = mesh.face_props.get("affordance")
         if labels is None and "affordance" in mesh.vertex_props:
             labels = majority_face_labels(mesh.faces, np.asarray(mesh.vertex_props["affordance"]))
         agrees = mesh.face_props.get("confirmed")
+        confidence = mesh.face_props.get("confidence")
         return cls(
             np.asarray(mesh.vertices, np.float64),
             np.asarray(mesh.faces, np.int64),
             None if labels is None else np.asarray(labels, np.int64),
             name,
             None if agrees is None else np.asarray(agrees) > 0,
+            None if confidence is None else np.asarray(confidence, np.float64) / 100.0,
         )
 
     @property

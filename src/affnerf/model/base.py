@@ -158,3 +158,18 @@ class ConditionedNeRF(nn.Module, ABC):
             return logits.argmax(dim=-1) + 1  # object classes start at 1
 
         return density, labels
+
+    def point_probabilities(self, encoding: Any, index: int = 0) -> Any:
+        """A callable giving object ``index``'s (N, C - 1) probabilities over the object classes (softmax of the
+        affordance logits, the fine field when there is one) at (N, 3) points: how sure the field is of a label
+        (:func:`affnerf.predict.mesh.face_confidence`). Devices as :meth:`point_fields`."""
+        field = self.fine if self.fine is not None else self.coarse
+        device = next(self.parameters()).device
+
+        def probabilities(points: torch.Tensor) -> torch.Tensor:
+            points = points.to(device)
+            obj = torch.full((len(points),), index, dtype=torch.long, device=device)
+            trunk_in = self.condition(encoding, obj)(points, torch.arange(len(points), device=device))[0]
+            return torch.softmax(field.geometry(points, trunk_in)[1], dim=-1)
+
+        return probabilities

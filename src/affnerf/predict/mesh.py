@@ -8,6 +8,7 @@ The functions take plain callables (points -> density, points -> class ids), so 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 import torch
@@ -82,7 +83,7 @@ def marching_cubes(volume: np.ndarray, level: float, half_extent: float) -> tupl
 
 @torch.no_grad()
 def evaluate_points(fn: PointFn, points: np.ndarray, chunk: int = POINTS_PER_CHUNK) -> np.ndarray:
-    """(N,) values of ``fn`` at (N, 3) points, in chunks."""
+    """(N, ...) values of ``fn`` at (N, 3) points, in chunks."""
     out = [fn(torch.from_numpy(points[s : s + chunk]).float()).cpu().numpy() for s in range(0, len(points), chunk)]
     return np.concatenate(out) if out else np.zeros(0)
 
@@ -116,6 +117,30 @@ def labelled_mesh_from_grid(
     )
 
 
+def face_confidence(mesh: LabelledMesh, probabilities: PointFn, chunk: int = POINTS_PER_CHUNK) -> np.ndarray:
+    """(F,) uint8 how sure the field is of each face's ``affordance`` label: the probability of that label among
+    the object classes at the face's centre, in whole percent rounded down (so ``>= 80`` is ``p >= 0.80``).
+
+    Args:
+        mesh: a labelled mesh with the face property ``affordance`` (class ids from 1).
+        probabilities: (N, 3) float32 points -> (N, C - 1) probabilities of the object classes 1..C-1
+            (``model.point_probabilities``).
+        chunk: points per call.
+
+    Example:
+        >>> m = LabelledMesh(np.eye(3), np.array([[0, 1, 2]]), face_props={"affordance": np.array([2])})
+        >>> face_confidence(m, lambda p: torch.tensor([[0.25, 0.75]]).expand(len(p), 2)).tolist()
+        [75]
+    """
+    labels = np.asarray(mesh.face_props["affordance"], np.int64)
+    if not len(labels):
+        return np.zeros(0, np.uint8)
+    centres = np.asarray(mesh.vertices, np.float32)[mesh.faces].mean(axis=1)
+    p = evaluate_points(probabilities, centres, chunk)
+    chosen = p[np.arange(len(labels)), np.clip(labels - 1, 0, p.shape[1] - 1)]
+    return np.floor(np.clip(chosen, 0.0, 1.0) * 100.0 + 1e-6).astype(np.uint8)
+
+
 def extract_labelled_mesh(
     density: PointFn,
     labels: PointFn,
@@ -145,6 +170,7 @@ def model_surface(
     occupancy: OccupancyGrid | None = None,
 ) -> tuple[LabelledMesh, float]:
     """The labelled mesh of one encoded object in the model's scene cube, and the density level it was cut at.
+    Its faces carry ``affordance`` and ``confidence`` (:func:`face_confidence`).
 
     Args:
         model: a trained model.
@@ -161,7 +187,9 @@ def model_surface(
     if level is None:
         spacing = 2.0 * half / (resolution - 1)
         level = object_level(volume, spacing, model.config.surface_density, model.config.surface_optical_depth)
-    return labelled_mesh_from_grid(volume, labels, level, half), float(level)
+    mesh = labelled_mesh_from_grid(volume, labels, level, half)
+    confidence = face_confidence(mesh, model.point_probabilities(encoding))
+    return replace(mesh, face_props={**mesh.face_props, "confidence": confidence}), float(level)
 
 
 def model_mesh(
