@@ -136,26 +136,33 @@ class ConditionedNeRF(nn.Module, ABC):
         fields = [self.coarse] if self.fine is None else [self.coarse, self.fine]
         return [f.geometry(points, trunk_in) for f in fields]
 
+    def _point_condition(self, encoding: Any, index: int) -> Any:
+        """A callable (N, 3) points -> (the field used for meshes, the points on the model's device, their
+        conditioned trunk input) for object ``index``: the fine field when there is one."""
+        field = self.fine if self.fine is not None else self.coarse
+        device = next(self.parameters()).device
+
+        def cond(points: torch.Tensor) -> tuple[Any, torch.Tensor, torch.Tensor]:
+            points = points.to(device)
+            rays = torch.arange(len(points), device=device)
+            obj = torch.full((len(points),), index, dtype=torch.long, device=device)
+            return field, points, self.condition(encoding, obj)(points, rays)[0]
+
+        return cond
+
     def point_fields(self, encoding: Any, index: int = 0) -> tuple[Any, Any]:
         """Density and affordance-class callables of object ``index`` at arbitrary (N, 3) points (the fine field
         when there is one), for mesh extraction. The points may live on any device (mesh extraction makes its grid
         on the CPU): they are moved to the model's, and the results stay there."""
-        field = self.fine if self.fine is not None else self.coarse
-        device = next(self.parameters()).device
-
-        def cond(points: torch.Tensor) -> torch.Tensor:
-            rays = torch.arange(len(points), device=device)
-            obj = torch.full((len(points),), index, dtype=torch.long, device=device)
-            return self.condition(encoding, obj)(points, rays)[0]
+        cond = self._point_condition(encoding, index)
 
         def density(points: torch.Tensor) -> torch.Tensor:
-            points = points.to(device)
-            return field.density_only(points, cond(points))
+            field, points, trunk_in = cond(points)
+            return field.density_only(points, trunk_in)
 
         def labels(points: torch.Tensor) -> torch.Tensor:
-            points = points.to(device)
-            _, logits = field.geometry(points, cond(points))
-            return logits.argmax(dim=-1) + 1  # object classes start at 1
+            field, points, trunk_in = cond(points)
+            return field.geometry(points, trunk_in)[1].argmax(dim=-1) + 1  # object classes start at 1
 
         return density, labels
 
@@ -163,13 +170,10 @@ class ConditionedNeRF(nn.Module, ABC):
         """A callable giving object ``index``'s (N, C - 1) probabilities over the object classes (softmax of the
         affordance logits, the fine field when there is one) at (N, 3) points: how sure the field is of a label
         (:func:`affnerf.predict.mesh.face_confidence`). Devices as :meth:`point_fields`."""
-        field = self.fine if self.fine is not None else self.coarse
-        device = next(self.parameters()).device
+        cond = self._point_condition(encoding, index)
 
         def probabilities(points: torch.Tensor) -> torch.Tensor:
-            points = points.to(device)
-            obj = torch.full((len(points),), index, dtype=torch.long, device=device)
-            trunk_in = self.condition(encoding, obj)(points, torch.arange(len(points), device=device))[0]
+            field, points, trunk_in = cond(points)
             return torch.softmax(field.geometry(points, trunk_in)[1], dim=-1)
 
         return probabilities
