@@ -7,9 +7,12 @@ import json
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from tyro.extras import SubcommandApp
+
+if TYPE_CHECKING:
+    from affnerf.grasp.io import PlannedGrasps
 
 app = SubcommandApp()
 
@@ -60,20 +63,27 @@ def plan(
             first sought on the part's faces at least this sure of their label, then on the whole part (default:
             0, off: on validation objects 0.7-0.9 cost lift-and-disturb; conventions §6).
     """
-    from affnerf.grasp.explain import no_grasp_text
     from affnerf.grasp.gripper import ParallelJawGripper
-    from affnerf.grasp.io import default_clearance, plan_into, summary
-    from affnerf.grasp.planner import MIN_CONFIDENCE, PART_MARGIN, PlanConfig, RefineConfig
-    from affnerf.grasp.size import extent
+    from affnerf.grasp.io import default_clearance, plan_into
+    from affnerf.grasp.planner import PlanConfig, RefineConfig
     from affnerf.grasp.target import load_grasp_object
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance, num, candidates, seed=seed, refine=RefineConfig(steps=refine_steps))
-    config = replace(config, part_margin=PART_MARGIN if part_margin is None else part_margin)
-    config = replace(config, min_confidence=MIN_CONFIDENCE if min_confidence is None else min_confidence)
-    config = replace(config, width_clearance=default_clearance(mesh) if width_clearance is None else width_clearance)
+    clearance = default_clearance(mesh) if width_clearance is None else width_clearance
+    given = {"part_margin": part_margin, "min_confidence": min_confidence}  # None: the planner's default
+    config = replace(config, width_clearance=clearance, **{k: v for k, v in given.items() if v is not None})
     gripper = ParallelJawGripper(max_opening=max_opening)
-    planned = plan_into(out, canonical, mesh, config, gripper, object_size, category)
+    report_planned(plan_into(out, canonical, mesh, config, gripper, object_size, category), out)
+
+
+def report_planned(planned: PlannedGrasps, out: Path) -> None:
+    """Say what `grasp plan` did: the size planned at and why there is no grasp (stderr), the grasps' summary and
+    where they are (stdout)."""
+    from affnerf.grasp.explain import no_grasp_text
+    from affnerf.grasp.io import summary
+    from affnerf.grasp.size import extent
+
     size = f"{extent(planned.obj.vertices):.3f} m ({planned.size.source})"
     print(f"size: largest side {size}; poses in metres", file=sys.stderr)
     if planned.no_grasp is not None:
