@@ -10,7 +10,7 @@ from affnerf.errors import AffnerfError
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.train import cache as cache_module
 from affnerf.train.cache import cached_points
-from affnerf.train.points import LABEL_BAND, inside_mesh, make_point_set, split_counts
+from affnerf.train.points import LABEL_BAND, inside_mesh, make_point_set, part_face_weights, split_counts
 
 SIGMAS = (0.005, 0.02)
 
@@ -97,6 +97,8 @@ def test_point_cache_is_reused_and_rebuilt_when_its_source_or_settings_change(tm
     (tmp_path / "cache" / "box.points" / "meta.json").unlink()  # as if a copy was cut short
     cached_points(mesh, "box", tmp_path / "cache", 0.25, (0.005, 0.03), total=4096)
     assert len(made) == 5 and sorted(p.name for p in (tmp_path / "cache").iterdir()) == ["box.points"]
+    cached_points(mesh, "box", tmp_path / "cache", 0.25, (0.005, 0.03), total=4096, part_balance=1.0)
+    assert len(made) == 6  # another part balance is another point set
 
 
 def test_a_missing_mesh_or_one_without_affordance_is_a_clear_error(tmp_path):
@@ -107,3 +109,27 @@ def test_a_missing_mesh_or_one_without_affordance_is_a_clear_error(tmp_path):
     with pytest.raises(AffnerfError, match="no per-face 'affordance'"):
         cached_points(tmp_path / "mesh.ply", "x", tmp_path / "cache", 0.25, SIGMAS)
     assert not any((tmp_path / "cache").iterdir())  # nothing half-written left behind
+
+
+def test_part_balance_gives_every_part_the_same_share_of_the_surface_samples():
+    labels = np.array([1, 1, 1, 2])
+    areas = np.array([4.0, 3.0, 1.0, 0.5])
+    for balance, share_of_small in ((0.0, 0.5 / 8.5), (1.0, 0.5), (0.5, 0.5**0.5 / (0.5**0.5 + 8**0.5))):
+        w = part_face_weights(areas, labels, balance)
+        assert w[labels == 2].sum() / w.sum() == pytest.approx(share_of_small)
+        assert w[0] / w[1] == pytest.approx(4.0 / 3.0)  # inside a part, still by area
+
+
+def test_a_small_part_gets_more_near_surface_points_with_part_balance():
+    """The cube's +z side is 1/6 of its surface (2 of 12 faces): area-weighted it gets about a sixth of the
+    near-surface points, balanced about half (the uniform quarter adds about 0.08 to both); the inside test holds."""
+
+    def top_share(points) -> float:
+        near_top = points.points[:, 2] > 0.09
+        return float(near_top.mean())
+
+    plain = make_point_set(_box(), 0.25, SIGMAS, seed=3, total=8192)
+    balanced = make_point_set(_box(), 0.25, SIGMAS, seed=3, total=8192, part_balance=1.0)
+    assert top_share(plain) < 0.3 < 0.4 < top_share(balanced)
+    inside = np.all(np.abs(balanced.points) < 0.1, axis=1)
+    np.testing.assert_array_equal(balanced.occupancy.astype(bool), inside)

@@ -206,20 +206,25 @@ def cached_frames(obj: ObjectData, cache_dir: Path, scale: float, crop_size: int
 POINTS_VERSION = 2
 
 
-def _points_signature(mesh_path: Path, half_extent: float, sigmas: tuple[float, ...], total: int) -> str:
+def _points_signature(
+    mesh_path: Path, half_extent: float, sigmas: tuple[float, ...], total: int, part_balance: float = 0.0
+) -> str:
     digest = hashlib.sha1(Path(mesh_path).read_bytes()).hexdigest()[:16]
-    return f"p{POINTS_VERSION}-{digest}-{half_extent:g}-{','.join(f'{s:g}' for s in sigmas)}-{total}"
+    balance = f"-b{part_balance:g}" if part_balance > 0 else ""  # area-weighted sets keep their older signature
+    return f"p{POINTS_VERSION}-{digest}-{half_extent:g}-{','.join(f'{s:g}' for s in sigmas)}-{total}{balance}"
 
 
-def _write_points(tmp: Path, mesh_path: Path, seed: int, half_extent: float, sigmas: tuple, total: int) -> None:
+def _write_points(
+    tmp: Path, mesh_path: Path, seed: int, half_extent: float, sigmas: tuple, total: int, part_balance: float
+) -> None:
     mesh = read_labelled_ply(mesh_path)
     if "affordance" not in mesh.face_props:
         raise input_error(mesh_path, "mesh has no per-face 'affordance' property (needed by --points-weight)")
-    points = make_point_set(mesh, half_extent, sigmas, seed, total)
+    points = make_point_set(mesh, half_extent, sigmas, seed, total, part_balance)
     np.save(tmp / "points.npy", points.points)
     np.save(tmp / "occupancy.npy", points.occupancy)
     np.save(tmp / "point_labels.npy", points.labels)
-    signature = _points_signature(mesh_path, half_extent, sigmas, total)
+    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance)
     (tmp / "meta.json").write_text(json.dumps({"signature": signature, "seed": seed}))
 
 
@@ -236,20 +241,23 @@ def cached_points(
     half_extent: float,
     sigmas: tuple[float, ...],
     total: int = POINT_SET_SIZE,
+    part_balance: float = 0.0,
 ) -> PointSet:
     """The object's supervision points (``<cache_dir>/<object_id>.points``), made from ``mesh_path`` first if
-    they are missing or stale (another mesh, cube or sigmas); the draws are seeded by the object id alone.
+    they are missing or stale (another mesh, cube, sigmas or part balance); the draws are seeded by the object id
+    alone.
 
     Args:
         mesh_path: the object's ``mesh.ply``; object_id: its dataset id; cache_dir: the frame cache's folder;
-        half_extent: half the scene cube's side (m); sigmas: near-surface noise sigmas (m); total: N.
+        half_extent: half the scene cube's side (m); sigmas: near-surface noise sigmas (m); total: N;
+        part_balance: the near-surface samples' part weighting (:func:`affnerf.train.points.part_face_weights`).
     """
     if not Path(mesh_path).is_file():
         raise input_error(mesh_path, "file not found (--points-weight needs each training object's mesh.ply)")
     folder = Path(cache_dir) / f"{object_id}.points"
     meta = folder / "meta.json"
-    signature = _points_signature(mesh_path, half_extent, sigmas, total)
+    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance)
     if not (meta.is_file() and json.loads(meta.read_text()).get("signature") == signature):
         seed = zlib.crc32(object_id.encode())
-        write_folder(folder, lambda tmp: _write_points(tmp, mesh_path, seed, half_extent, sigmas, total))
+        write_folder(folder, lambda tmp: _write_points(tmp, mesh_path, seed, half_extent, sigmas, total, part_balance))
     return load_points(folder)

@@ -74,6 +74,10 @@ class TrainConfig:
         point_affordance_weight: weight of the points' affordance cross-entropy relative to their occupancy BCE.
         point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set.
         point_sigma_far: noise sigma (m) of the second half (a quarter of each set is uniform over the cube).
+        point_part_balance: how the near-surface points are spread over the object's affordance parts: 0 by area
+            (Occupancy Networks' sampling), 1 the same share for every part however small its surface (a bail, a
+            handle), in between each face's area times its part's area to the power -b
+            (:func:`affnerf.train.points.part_face_weights`). Beyond the paper.
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints.
@@ -122,6 +126,7 @@ class TrainConfig:
     point_affordance_weight: float = 1.0
     point_sigma_near: float = 0.005
     point_sigma_far: float = 0.02
+    point_part_balance: float = 0.0
     image_scale: float = 1.0
     categories: str = ""
     checkpoint_every: int = 2000

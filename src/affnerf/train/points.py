@@ -15,6 +15,10 @@ parts that interpenetrate (a handle sunk into a body) are inside where they over
 meshes are often open or inconsistently oriented) use the parity of the crossings, which ignores face orientation;
 there, a region enclosed twice by overlapping parts counts as outside, and open sheets enclose nothing.
 
+With a part balance b > 0 (:func:`part_face_weights`), the near-surface samples weight each face by its area times
+its affordance part's total area to the power -b: at b = 1 every part gets the same share of the points however
+small its surface (a bucket's bail, a cabinet's handles), at b = 0 the plain area weighting.
+
 The nearest face is that of the nearest of :data:`SURFACE_SAMPLES` area-weighted surface samples (about 1 mm apart
 on a 0.44 m object), so labels are exact up to the sample spacing; points deeper inside than the band use every
 :data:`DEEP_STRIDE`-th sample (about 3 mm apart), which only matters where two parts are nearly equidistant.
@@ -84,15 +88,38 @@ def split_counts(total: int, num_sigmas: int, uniform_share: float = UNIFORM_SHA
     return [uniform, *near.tolist()]
 
 
+def part_face_weights(areas: np.ndarray, labels: np.ndarray, balance: float) -> np.ndarray:
+    """(F,) sampling weight of each face: its area times its part's total area to the power ``-balance``.
+
+    Args:
+        areas: (F,) face areas; labels: (F,) the faces' part (affordance) ids; balance: b in [0, 1].
+
+    Example:
+        >>> labels = np.array([1, 1, 2, 2])
+        >>> w = part_face_weights(np.array([3.0, 1.0, 0.5, 0.5]), labels, 1.0)
+        >>> float(w[labels == 1].sum()), float(w[labels == 2].sum())
+        (1.0, 1.0)
+    """
+    areas = np.asarray(areas, np.float64)
+    _, part = np.unique(labels, return_inverse=True)
+    part_area = np.bincount(part, weights=areas)
+    return areas * np.maximum(part_area[part], 1e-12) ** (-float(balance))
+
+
 def sample_positions(
-    mesh: trimesh.Trimesh, half_extent: float, sigmas: tuple[float, ...], total: int, rng: np.random.Generator
+    mesh: trimesh.Trimesh,
+    half_extent: float,
+    sigmas: tuple[float, ...],
+    total: int,
+    rng: np.random.Generator,
+    face_weight: np.ndarray | None = None,
 ) -> np.ndarray:
-    """(total, 3) positions: uniform over the cube [-half_extent, half_extent]^3, then area-weighted surface samples
-    plus isotropic Gaussian noise of each sigma (metres), clipped to the cube."""
+    """(total, 3) positions: uniform over the cube [-half_extent, half_extent]^3, then surface samples (area-weighted,
+    or by the (F,) ``face_weight``) plus isotropic Gaussian noise of each sigma (metres), clipped to the cube."""
     counts = split_counts(total, len(sigmas))
     parts = [rng.uniform(-half_extent, half_extent, (counts[0], 3))]
     for sigma, count in zip(sigmas, counts[1:], strict=True):
-        surface, _ = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
+        surface, _ = trimesh.sample.sample_surface(mesh, count, face_weight=face_weight, seed=int(rng.integers(2**31)))
         parts.append(surface + rng.normal(0.0, sigma, (count, 3)))
     return np.clip(np.concatenate(parts), -half_extent, half_extent)
 
@@ -149,7 +176,12 @@ def nearest_labels(
 
 
 def make_point_set(
-    mesh: LabelledMesh, half_extent: float, sigmas: tuple[float, ...], seed: int, total: int = POINT_SET_SIZE
+    mesh: LabelledMesh,
+    half_extent: float,
+    sigmas: tuple[float, ...],
+    seed: int,
+    total: int = POINT_SET_SIZE,
+    part_balance: float = 0.0,
 ) -> PointSet:
     """The supervision points of a labelled mesh (face property ``affordance``), see the module docstring.
 
@@ -159,12 +191,15 @@ def make_point_set(
         sigmas: noise sigmas of the near-surface points, metres.
         seed: seed of the draws (the same seed and mesh give the same points).
         total: N, points in the set.
+        part_balance: b of the near-surface samples' part weighting (:func:`part_face_weights`; 0 = by area).
     """
     if "affordance" not in mesh.face_props:
         raise ValueError("mesh has no per-face 'affordance' property")
     rng = np.random.default_rng([seed, 53])
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
-    points = sample_positions(tm, half_extent, sigmas, total, rng)
+    face_labels = np.asarray(mesh.face_props["affordance"])
+    weight = part_face_weights(tm.area_faces, face_labels, part_balance) if part_balance > 0 else None
+    points = sample_positions(tm, half_extent, sigmas, total, rng, weight)
     inside = inside_mesh(tm, points)
-    labels = nearest_labels(tm, np.asarray(mesh.face_props["affordance"]), points, inside, int(rng.integers(2**31)))
+    labels = nearest_labels(tm, face_labels, points, inside, int(rng.integers(2**31)))
     return PointSet(points.astype(np.float32), inside.astype(np.uint8), labels)

@@ -135,12 +135,15 @@ def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> d
     """Make (once) and memory-map the training objects' 3D supervision points; ranks share the work."""
     entries = ds.objects("train", config.categories)
     sigmas = (config.point_sigma_near, config.point_sigma_far)
-    if config.points_per_object < 1 or min(sigmas) < 0:
-        raise AffnerfError("--points-weight needs --points-per-object >= 1 and point sigmas >= 0")
+    if config.points_per_object < 1 or min(sigmas) < 0 or not 0 <= config.point_part_balance <= 1:
+        raise AffnerfError(
+            "--points-weight needs --points-per-object >= 1, point sigmas >= 0 and --point-part-balance in [0, 1]"
+        )
 
     def points(entry: IndexEntry) -> PointSet:
         mesh = ds.root / entry.path / "mesh.ply"
-        return cached_points(mesh, entry.id, _cache_dir(config), config.model.scene_half_extent, sigmas)
+        half_extent, balance = config.model.scene_half_extent, config.point_part_balance
+        return cached_points(mesh, entry.id, _cache_dir(config), half_extent, sigmas, part_balance=balance)
 
     show = config.progress and ctx.is_main
     for entry in tqdm(entries[ctx.rank :: ctx.world], desc="caching points", unit="obj", disable=not show):
