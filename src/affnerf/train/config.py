@@ -77,7 +77,8 @@ class TrainConfig:
         point_part_balance: how the near-surface points are spread over the object's affordance parts: 0 by area
             (Occupancy Networks' sampling), 1 the same share for every part however small its surface (a bail, a
             handle), in between each face's area times its part's area to the power -b
-            (:func:`affnerf.train.points.part_face_weights`). Beyond the paper.
+            (:func:`affnerf.train.points.part_face_weights`). Beyond the paper; off in both presets: as a further
+            stage it moved neither the 2D nor the 3D scores nor the part grasps (results/part_balance.md).
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints.
