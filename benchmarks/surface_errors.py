@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 from collections import defaultdict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -116,10 +117,18 @@ def main() -> None:
     parser.add_argument("--split", default="test")
     parser.add_argument("--per-category", type=int, default=5)
     parser.add_argument("--resolution", type=int, default=128)
+    parser.add_argument(
+        "--surface-optical-depth", type=float, default=None, help="override the model's per-object level (0 = off)"
+    )
     args = parser.parse_args()
     ds = Dataset.open(args.data)
     config = EvalConfig(args.run, args.data, args.out.parent, device="cpu", mesh_resolution=args.resolution)
     methods = [build_method(name, config, ds) for name in args.methods.split(",")]
+    for method in methods:
+        loaded = getattr(method, "loaded", None)
+        if args.surface_optical_depth is not None and loaded is not None:
+            model = loaded.model
+            model.config = replace(model.config, surface_optical_depth=args.surface_optical_depth)
     protocol = ProtocolConfig(input_views=1, target_views=0)
     rows = []
     for entry in interleave_categories(ds.objects(args.split), args.per_category):
