@@ -15,7 +15,7 @@ from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
-from affnerf.train.config import PAPER, SMALL
+from affnerf.train.config import PAPER, SMALL, check_options
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
 from affnerf.train.trainer import Trainer, train
@@ -90,3 +90,10 @@ def test_points_without_points_per_object_are_refused(tiny_train_config):
     config = tiny_train_config(points_weight=1.0, points_per_object=0)
     with pytest.raises(AffnerfError, match="points-per-object >= 1"):
         train(config)
+
+
+def test_a_part_balance_outside_zero_to_one_is_refused_only_with_points():
+    with pytest.raises(AffnerfError, match="point-part-balance in"):
+        check_options(replace(SMALL, point_part_balance=1.5))
+    check_options(replace(SMALL, point_part_balance=1.0))
+    check_options(replace(SMALL, points_weight=0.0, point_part_balance=1.5))  # no points: nothing to balance

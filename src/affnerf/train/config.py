@@ -197,6 +197,13 @@ def check_options(config: TrainConfig) -> None:
             )
         if config.objects_per_step < 2:
             raise AffnerfError("--view-consistency-weight needs at least 2 objects a step (--objects-per-step)")
+    sigmas = (config.point_sigma_near, config.point_sigma_far)
+    if config.points_weight > 0 and (
+        config.points_per_object < 1 or min(sigmas) < 0 or not 0 <= config.point_part_balance <= 1
+    ):
+        raise AffnerfError(
+            "--points-weight needs --points-per-object >= 1, point sigmas >= 0 and --point-part-balance in [0, 1]"
+        )
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

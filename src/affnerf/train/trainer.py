@@ -134,11 +134,7 @@ def _cache_dir(config: TrainConfig) -> Path:
 def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> dict[str, PointSet]:
     """Make (once) and memory-map the training objects' 3D supervision points; ranks share the work."""
     entries = ds.objects("train", config.categories)
-    sigmas = (config.point_sigma_near, config.point_sigma_far)
-    if config.points_per_object < 1 or min(sigmas) < 0 or not 0 <= config.point_part_balance <= 1:
-        raise AffnerfError(
-            "--points-weight needs --points-per-object >= 1, point sigmas >= 0 and --point-part-balance in [0, 1]"
-        )
+    sigmas = (config.point_sigma_near, config.point_sigma_far)  # checked by check_options
 
     def points(entry: IndexEntry) -> PointSet:
         mesh = ds.root / entry.path / "mesh.ply"
