@@ -18,15 +18,16 @@ SHIPPED=src/affnerf/weights/affnerf-small.pt
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 
-# one_balance B CORE: the stage with balance B on core CORE, its calibration, val40 and grasps
+# one_balance B CORE: the stage with balance B, its calibration, val40 and grasps, all pinned to core CORE
 one_balance() {
-    local b=$1 core=$2 run="$W/balance$1"
-    taskset -c "$core" .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps 15500 --stop-at 14393 \
+    local b=$1 run="$W/balance$1"
+    taskset -cp "$2" "$BASHPID" > /dev/null  # this subshell and everything it starts
+    .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps 15500 --stop-at 14393 \
         --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 --no-progress \
         --init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$W/cache$b" --point-part-balance "$b"
-    taskset -c "$core" .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
-    taskset -c "$core" bash -c "source benchmarks/side_by_side.sh; W=$W DATA=$DATA; val40 balance$b $run"
-    taskset -c "$core" .venv/bin/affnerf eval grasp --run "$run" --data "$DATA" --split val --max-objects 5 \
+    .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
+    val40 "balance$b" "$run"
+    .venv/bin/affnerf eval grasp --run "$run" --data "$DATA" --split val --max-objects 5 \
         --categories "$GRASP_CATEGORIES" --no-pictures --device cpu --out "$W/grasp_balance$b"
 }
 
