@@ -49,3 +49,24 @@ val40() {
     .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
         --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }
+
+# scored_stage NAME CORE CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the shipped weights with the plain
+# stage's schedule (fine_tune_jitter.sh: a fresh Adam, 2e-4 -> 2e-5 over 15,500 steps, stopped at 14,393) and the
+# given options, single-threaded on core CORE (this subshell and all it starts) with its frame and point cache in
+# CACHE; then calibrated (32 validation objects), val40, surface errors (surface_errors.py, 5 test objects per
+# category, to W/surface_errors_NAME.json) and grasps on 5 validation objects of each of GRASP_CATEGORIES.
+scored_stage() {
+    local name=$1 run="$W/$1" cache=$3
+    taskset -cp "$2" "$BASHPID" > /dev/null
+    shift 3
+    OMP_NUM_THREADS=1 .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps 15500 \
+        --stop-at 14393 --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 --no-progress \
+        --init-from src/affnerf/weights/affnerf-small.pt --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" "$@"
+    OMP_NUM_THREADS=1 .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
+    OMP_NUM_THREADS=1 val40 "$name" "$run"
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$run" --methods affnerf \
+        --out "$W/surface_errors_$name.json"
+    OMP_NUM_THREADS=1 .venv/bin/affnerf eval grasp --run "$run" --data "$DATA" --split val --max-objects 5 \
+        --categories "${GRASP_CATEGORIES:-bucket,cabinet,teapot,eyeglasses}" --no-pictures --device cpu \
+        --out "$W/grasp_$name"
+}

@@ -97,3 +97,17 @@ def test_a_part_balance_outside_zero_to_one_is_refused_only_with_points():
         check_options(replace(SMALL, point_part_balance=1.5))
     check_options(replace(SMALL, point_part_balance=1.0))
     check_options(replace(SMALL, points_weight=0.0, point_part_balance=1.5))  # no points: nothing to balance
+
+
+def test_a_points_weight_schedule_is_logged_and_goes_from_start_to_final(tiny_train_config):
+    config = tiny_train_config(steps=10, checkpoint_every=10, points_weight=1.0, points_weight_final=0.0)
+    train(config)
+    mus = [r["train/points_weight"] for r in _metrics(config.out)]
+    assert mus[0] == pytest.approx(1.0) and mus[-1] == pytest.approx(0.1)  # step 9 of 10
+    assert all(a > b for a, b in zip(mus, mus[1:], strict=False))
+
+
+def test_a_points_weight_final_without_points_is_refused():
+    with pytest.raises(AffnerfError, match="--points-weight-final"):
+        check_options(replace(SMALL, points_weight=0.0, points_weight_final=0.5))
+    check_options(replace(SMALL, points_weight_final=0.5))

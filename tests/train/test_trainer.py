@@ -18,7 +18,8 @@ from affnerf.train import distributed as dist_utils
 from affnerf.train.cache import cached_frames
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
-from affnerf.train.trainer import Trainer, learning_rate, train
+from affnerf.train.schedule import learning_rate
+from affnerf.train.trainer import Trainer, train
 
 
 def _metrics(run):

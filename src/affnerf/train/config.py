@@ -70,6 +70,9 @@ class TrainConfig:
         points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
             paper's loss; conventions §4): occupancy BCE of both fields at ``points_per_object`` points per object,
             plus ``point_affordance_weight`` times their affordance cross-entropy.
+        points_weight_final: with a value >= 0, μ moves in a straight line from ``points_weight`` at the first
+            step to this value at the last (:func:`affnerf.train.schedule.points_weight`); negative (the default):
+            ``points_weight`` throughout. Beyond the paper, for a heavy 3D term early or late in a stage.
         points_per_object: supervision points drawn per object and step from its cached point set.
         point_affordance_weight: weight of the points' affordance cross-entropy relative to their occupancy BCE.
         point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set.
@@ -123,6 +126,7 @@ class TrainConfig:
     view_consistency_weight: float = 0.0
     input_jitter: float = 0.0
     points_weight: float = 0.0
+    points_weight_final: float = -1.0
     points_per_object: int = 1024
     point_affordance_weight: float = 1.0
     point_sigma_near: float = 0.005
@@ -204,6 +208,8 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError(
             "--points-weight needs --points-per-object >= 1, point sigmas >= 0 and --point-part-balance in [0, 1]"
         )
+    if config.points_weight_final >= 0 and config.points_weight <= 0:
+        raise AffnerfError("--points-weight-final needs --points-weight > 0 (the weight the schedule starts from)")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

@@ -26,7 +26,7 @@ from affnerf.train.validate import validate
 #: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with
 #: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``, weighted) and
-#: the learning rate it used (``train/lr``, a float).
+#: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``).
 IterationOutputs = dict[str, torch.Tensor | float]
 
 
@@ -105,6 +105,7 @@ class LogScalars:
             "train/psnr": -10.0 * math.log10(max(mse, 1e-10)),
             "train/affordance_accuracy": means["train/affordance_accuracy"],
             "train/lr": float(outputs["train/lr"]),
+            **{key: float(outputs[key]) for key in ("train/points_weight",) if key in outputs},
             "perf/rays_per_second": self.window_rays / max(elapsed, 1e-9),
             "time/seconds": time.perf_counter() - self.started,
         }

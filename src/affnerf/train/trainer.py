@@ -46,25 +46,10 @@ from affnerf.train.loss import (
 )
 from affnerf.train.points import PointSet
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
+from affnerf.train.schedule import learning_rate, points_weight
 from affnerf.train.state import TrainingState, initial_weights, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
-
-
-def learning_rate(config: TrainConfig, step: int) -> float:
-    """Exponential decay from ``optim.lr`` at step 0 to ``optim.lr_final`` at the last step (constant after).
-
-    Example:
-        >>> from pathlib import Path
-        >>> from affnerf.train.config import TrainConfig
-        >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100)
-        >>> learning_rate(c, 0), round(learning_rate(c, 50), 12), round(learning_rate(c, 100), 12)
-        (0.0005, 0.000158113883, 5e-05)
-        >>> learning_rate(c, 250) == learning_rate(c, 100)
-        True
-    """
-    frac = min(max(step / max(config.steps, 1), 0.0), 1.0)
-    return config.optim.lr * (config.optim.lr_final / config.optim.lr) ** frac
 
 
 @dataclass
@@ -304,7 +289,8 @@ class Trainer:
         with ``points_weight`` > 0, ``points_per_object`` points of each object), renders the R rays coarse and
         fine from the B objects' encoded views, back-propagates the loss and steps Adam. Returns 0-d detached
         tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
-        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
+        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float; with
+        points also ``train/points_weight``, the step's μ);
         with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field; and the model's
         auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
@@ -319,16 +305,20 @@ class Trainer:
             )
             batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
         points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
-        total, outputs = self._loss(batch, points)
+        mu = points_weight(config, step)
+        total, outputs = self._loss(batch, points, mu)
         state.optimizer.zero_grad(set_to_none=True)
         total.backward()
         if config.optim.grad_clip > 0:
             torch.nn.utils.clip_grad_norm_(state.model.parameters(), config.optim.grad_clip)
         state.optimizer.step()
-        return {"loss/total": total.detach(), **outputs, "train/lr": lr}
+        scheduled = {"train/lr": lr} if points is None else {"train/lr": lr, "train/points_weight": mu}
+        return {"loss/total": total.detach(), **outputs, **scheduled}
 
-    def _loss(self, batch: RayBatch, points: PointBatch | None) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
-        """The step's total loss and its detached parts (see :meth:`train_iteration`)."""
+    def _loss(
+        self, batch: RayBatch, points: PointBatch | None, mu: float
+    ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """The step's total loss and its detached parts (see :meth:`train_iteration`); ``mu``: the points' weight."""
         config = self.config
         coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points)
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
@@ -357,7 +347,7 @@ class Trainer:
             points.occupancy,
             points.labels,
             slab,
-            config.points_weight,
+            mu,
             config.point_affordance_weight,
             self.class_weight,
         )

@@ -1,0 +1,46 @@
+"""Per-step schedules of a run: the learning rate and the weight of the 3D supervision.
+
+Both are pure functions of the resolved config and the step (steps done so far, 0-based), so a resumed run and a
+fresh one take the same values at the same step.
+"""
+
+from __future__ import annotations
+
+from affnerf.train.config import TrainConfig
+
+
+def _progress(config: TrainConfig, step: int) -> float:
+    """Fraction of the schedule done at ``step``: 0 at the first step, 1 at ``steps`` and after."""
+    return min(max(step / max(config.steps, 1), 0.0), 1.0)
+
+
+def learning_rate(config: TrainConfig, step: int) -> float:
+    """Exponential decay from ``optim.lr`` at step 0 to ``optim.lr_final`` at the last step (constant after).
+
+    Example:
+        >>> from pathlib import Path
+        >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100)
+        >>> learning_rate(c, 0), round(learning_rate(c, 50), 12), round(learning_rate(c, 100), 12)
+        (0.0005, 0.000158113883, 5e-05)
+        >>> learning_rate(c, 250) == learning_rate(c, 100)
+        True
+    """
+    return config.optim.lr * (config.optim.lr_final / config.optim.lr) ** _progress(config, step)
+
+
+def points_weight(config: TrainConfig, step: int) -> float:
+    """The 3D supervision's weight μ at ``step``: ``points_weight`` throughout, or, with ``points_weight_final``
+    >= 0, a straight line from ``points_weight`` at step 0 to ``points_weight_final`` at the last step.
+
+    Example:
+        >>> from pathlib import Path
+        >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100, points_weight=1.0, points_weight_final=0.1)
+        >>> [round(points_weight(c, s), 6) for s in (0, 50, 100, 150)]
+        [1.0, 0.55, 0.1, 0.1]
+        >>> points_weight(TrainConfig(data=Path("."), out=Path("."), points_weight=0.3), 7)
+        0.3
+    """
+    if config.points_weight_final < 0:
+        return config.points_weight
+    frac = _progress(config, step)
+    return (1.0 - frac) * config.points_weight + frac * config.points_weight_final
