@@ -2,8 +2,10 @@
 # A scheduled weight of the 3D supervision (issue 12; benchmarks/results/points_schedule.md). points_weight.md found
 # a 10x heavier occupancy term puts thin parts into the meshes (temples, handles, bails 1.7-3x as often) but costs
 # the rendering 0.014 mIoU. Here, as further stages of the plain stage's length from the shipped weights
-# (side_by_side.sh's scored_stage), the weight μ over a stage: each of STAGES is NAME:START:FINAL (μ in a straight
-# line from START to FINAL; FINAL -1 keeps START throughout). Two at a time, one per core, sharing one warm cache.
+# (side_by_side.sh's scored_stage), the weight μ over a stage: each of STAGES is NAME:START:FINAL[:NU] (μ in a
+# straight line from START to FINAL; FINAL -1 keeps START throughout; NU the points' affordance weight ν relative to
+# their occupancy, 1 unless given). Two at a time, one per core, sharing one warm cache. The second pair of the
+# results: STAGES="nu4:0.1:-1:4 early1.0to0.1_nu4:1.0:0.1:4".
 #   DATA=... benchmarks/points_schedule.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,9 +20,9 @@ warm_cache "$CACHE" --points-weight 0.1
 
 i=0
 for stage in $STAGES; do
-    IFS=: read -r name start final <<< "$stage"
+    IFS=: read -r name start final nu <<< "$stage"
     scored_stage "$name" $((i % 2)) "$CACHE" --points-weight "$start" --points-weight-final "$final" \
-        > "$W/$name.log" 2>&1 &
+        --point-affordance-weight "${nu:-1}" > "$W/$name.log" 2>&1 &
     i=$((i + 1))
     [ $((i % 2)) = 0 ] && wait
 done

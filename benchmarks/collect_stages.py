@@ -1,0 +1,142 @@
+"""Gather the scores of further stages run by side_by_side.sh's ``scored_stage`` into one results file.
+
+For each NAME (a run W/NAME): its steps, the calibrated mesh level and optical depth (W/NAME/calibration.json),
+val40 (W/val40_NAME/metrics.json: mean and per category), the surface errors (W/surface_errors_NAME.json, its
+``affnerf`` summary) and the validation grasps (W/grasp_NAME/grasp_metrics.json); a reference results file's runs
+(``--reference``, e.g. the plain stage's row in points_weight.json) can be copied in beside them. With
+``--markdown``, the tables of a results page (val40, per category, the hollow families and thin parts, grasps) are
+written from those numbers, the shipped model's surface errors (results/surface_errors.json) as the first row of
+theirs.
+
+    .venv/bin/python benchmarks/collect_stages.py --work W --names a b --out benchmarks/results/X.json \
+        [--reference benchmarks/results/points_weight.json:0.1:plain] [--markdown TABLES.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def _read(path: Path) -> dict | None:
+    """The JSON at ``path``, or None when it is not there (a stage not scored yet)."""
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def stage_scores(work: Path, name: str) -> dict:
+    """One stage's scores (see the module docstring); parts not yet written are None."""
+    calibration = _read(work / name / "calibration.json") or {}
+    summary = _read(work / name / "summary.json") or {}
+    val40 = _read(work / f"val40_{name}" / "metrics.json")
+    surface = _read(work / f"surface_errors_{name}.json")
+    return {
+        "steps": summary.get("step"),
+        "level": calibration.get("chosen_level"),
+        "optical_depth": calibration.get("chosen_optical_depth"),
+        "val40": None if val40 is None else {"mean": val40["mean"], "categories": val40["categories"]},
+        "surface_errors": None if surface is None else surface["summary"]["affnerf"],
+        "grasp_val": _read(work / f"grasp_{name}" / "grasp_metrics.json"),
+    }
+
+
+CATEGORIES = ("bottle", "bucket", "cabinet", "eyeglasses", "pen", "scissors", "screwdriver", "teapot")
+#: (category, part) whose recall the thin-parts table shows: the bail, the cabinet handle, the eyeglass temple.
+THIN_PARTS = (("bucket", "grasp", "bail"), ("cabinet", "pull", "handle"), ("eyeglasses", "wear", "temple"))
+GRASP_CATEGORIES = ("bucket", "cabinet", "eyeglasses", "teapot")
+
+
+def _row(cells: list) -> str:
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+def _table(header: list[str], rows: list[list]) -> str:
+    return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])
+
+
+def val40_tables(runs: dict) -> str:
+    """The val40 means, and F@1cm / 3D affordance mIoU per category, one row per run."""
+    keys = ("mIoU", "MPA", "PSNR", "fscore_1cm", "affordance_miou_3d")
+    means = [
+        [name, f"{r['level']:g} /m, depth {r['optical_depth']:g}", *(f"{r['val40']['mean'][k]:.3f}" for k in keys)]
+        for name, r in runs.items()
+    ]
+    head = ["stage", "level (calibrated)", "val40 mIoU", "MPA", "PSNR", "F@1cm", "3D aff. mIoU"]
+    per_cat = [
+        [
+            name,
+            *(
+                f"{c['fscore_1cm']:.2f} / {c['affordance_miou_3d']:.2f}"
+                for c in map(r["val40"]["categories"].get, CATEGORIES)
+            ),
+        ]
+        for name, r in runs.items()
+    ]
+    return (
+        _table(head, means)
+        + "\n\nF@1cm / 3D affordance mIoU per category:\n\n"
+        + _table(["stage", *CATEGORIES], per_cat)
+    )
+
+
+def surface_table(runs: dict, shipped: dict) -> str:
+    """F@1cm, cavity filled and thin-part recall of the hollow families on the test objects (surface_errors.py)."""
+    head = ["stage", "bucket F", "bucket walls enclosed", "cabinet F", "cabinet cavity filled", "eyeglasses F"]
+    head += [f"{label} recall" for _, _, label in THIN_PARTS]
+    rows = []
+    for name, s in [("shipped", shipped), *((n, r["surface_errors"]) for n, r in runs.items())]:
+        if s is None:
+            continue
+        cells = [s["bucket"]["fscore"], s["bucket"]["solid"], s["cabinet"]["fscore"], s["cabinet"]["cavity_filled"]]
+        cells += [s["eyeglasses"]["fscore"], *(s[c]["part_recall"][p] for c, p, _ in THIN_PARTS)]
+        rows.append([name, *(f"{v:.2f}" for v in cells)])
+    return _table(head, rows)
+
+
+def grasp_table(runs: dict) -> str:
+    """Grasps restricted to the predicted task part on validation objects: on-part share and lift-and-disturb."""
+
+    def cell(v: dict) -> str:
+        if not v["grasps"]:
+            return f"no grasp ({v['no_grasp_objects']}/{v['objects']} without)"
+        return (
+            f"{v['on_part_share']:.0%} on part, {v['disturb_success']:.0%} lift+disturb "
+            f"({v['no_grasp_objects']}/{v['objects']} without)"
+        )
+
+    rows = []
+    for name, r in runs.items():
+        cats = r["grasp_val"]["categories"]
+        mean = r["grasp_val"]["mean"]["predicted_part"]
+        rows.append(
+            [
+                name,
+                *(cell(cats[c]["predicted_part"]) for c in GRASP_CATEGORIES),
+                f"{mean['on_part_share']:.0%} on part, {mean['disturb_success']:.0%} lift+disturb",
+            ]
+        )
+    return _table(["stage", *GRASP_CATEGORIES, "mean over the categories with grasps"], rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--work", type=Path, required=True)
+    parser.add_argument("--names", nargs="+", required=True)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--reference", action="append", default=[], help="FILE:RUN:NAME, a run of a results file")
+    parser.add_argument("--markdown", type=Path, help="write the results page's tables here")
+    args = parser.parse_args()
+    runs = {}
+    for ref in args.reference:
+        file, run, name = ref.rsplit(":", 2)
+        runs[name] = json.loads(Path(file).read_text())["runs"][run]
+    runs.update({name: stage_scores(args.work, name) for name in args.names})
+    args.out.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
+    if args.markdown:
+        shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
+        parts = (val40_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs))
+        args.markdown.write_text("\n\n".join(parts) + "\n")
+
+
+if __name__ == "__main__":
+    main()
