@@ -2,7 +2,8 @@
 
 For each NAME (a run W/NAME): its steps, the calibrated mesh level and optical depth (W/NAME/calibration.json),
 val40 (W/val40_NAME/metrics.json: mean and per category), the surface errors (W/surface_errors_NAME.json, its
-``affnerf`` summary) and the validation grasps (W/grasp_NAME/grasp_metrics.json); a reference results file's runs
+``affnerf`` summary), the validation grasps (W/grasp_NAME/grasp_metrics.json) and, where it was run, val40's
+protocol on the 64 test objects (W/test64_NAME); a reference results file's runs
 (``--reference``, e.g. the plain stage's row in points_weight.json) can be copied in beside them. With
 ``--markdown``, the tables of a results page (val40, per category, the hollow families and thin parts, grasps) are
 written from those numbers, the shipped model's surface errors (results/surface_errors.json) as the first row of
@@ -24,17 +25,22 @@ def _read(path: Path) -> dict | None:
     return json.loads(path.read_text()) if path.exists() else None
 
 
+def _eval_means(folder: Path) -> dict | None:
+    """An ``affnerf eval`` folder's mean and per-category metrics, or None when it is not there."""
+    metrics = _read(folder / "metrics.json")
+    return None if metrics is None else {"mean": metrics["mean"], "categories": metrics["categories"]}
+
+
 def stage_scores(work: Path, name: str) -> dict:
     """One stage's scores (see the module docstring); parts not yet written are None."""
     calibration = _read(work / name / "calibration.json") or {}
     summary = _read(work / name / "summary.json") or {}
-    val40 = _read(work / f"val40_{name}" / "metrics.json")
     surface = _read(work / f"surface_errors_{name}.json")
     return {
         "steps": summary.get("step"),
         "level": calibration.get("chosen_level"),
         "optical_depth": calibration.get("chosen_optical_depth"),
-        "val40": None if val40 is None else {"mean": val40["mean"], "categories": val40["categories"]},
+        "val40": _eval_means(work / f"val40_{name}"),
         "surface_errors": None if surface is None else surface["summary"]["affnerf"],
         "grasp_val": _read(work / f"grasp_{name}" / "grasp_metrics.json"),
     }
@@ -54,27 +60,29 @@ def _table(header: list[str], rows: list[list]) -> str:
     return "\n".join([_row(header), _row(["---"] * len(header)), *(_row(r) for r in rows)])
 
 
-def val40_tables(runs: dict) -> str:
-    """The val40 means, and F@1cm / 3D affordance mIoU per category, one row per run."""
+def eval_tables(runs: dict, key: str = "val40") -> str:
+    """The means of the eval ``key`` (val40 or test64), and F@1cm / 3D affordance mIoU per category, one row per run
+    scored there."""
+    runs = {name: r for name, r in runs.items() if r.get(key) is not None}
     keys = ("mIoU", "MPA", "PSNR", "fscore_1cm", "affordance_miou_3d")
     means = [
-        [name, f"{r['level']:g} /m, depth {r['optical_depth']:g}", *(f"{r['val40']['mean'][k]:.3f}" for k in keys)]
+        [name, f"{r['level']:g} /m, depth {r['optical_depth']:g}", *(f"{r[key]['mean'][k]:.3f}" for k in keys)]
         for name, r in runs.items()
     ]
-    head = ["stage", "level (calibrated)", "val40 mIoU", "MPA", "PSNR", "F@1cm", "3D aff. mIoU"]
+    head = ["stage", "level (calibrated)", f"{key} mIoU", "MPA", "PSNR", "F@1cm", "3D aff. mIoU"]
     per_cat = [
         [
             name,
             *(
                 f"{c['fscore_1cm']:.2f} / {c['affordance_miou_3d']:.2f}"
-                for c in map(r["val40"]["categories"].get, CATEGORIES)
+                for c in map(r[key]["categories"].get, CATEGORIES)
             ),
         ]
         for name, r in runs.items()
     ]
     return (
         _table(head, means)
-        + "\n\nF@1cm / 3D affordance mIoU per category:\n\n"
+        + f"\n\n{key}: F@1cm / 3D affordance mIoU per category:\n\n"
         + _table(["stage", *CATEGORIES], per_cat)
     )
 
@@ -106,6 +114,8 @@ def grasp_table(runs: dict) -> str:
 
     rows = []
     for name, r in runs.items():
+        if r["grasp_val"] is None:  # not grasped yet
+            continue
         cats = r["grasp_val"]["categories"]
         mean = r["grasp_val"]["mean"]["predicted_part"]
         rows.append(
@@ -131,10 +141,14 @@ def main() -> None:
         file, run, name = ref.rsplit(":", 2)
         runs[name] = json.loads(Path(file).read_text())["runs"][run]
     runs.update({name: stage_scores(args.work, name) for name in args.names})
+    for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (any stage)
+        run["test64"] = _eval_means(args.work / f"test64_{name}")
     args.out.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
     if args.markdown:
         shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
-        parts = (val40_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs))
+        parts = [eval_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs)]
+        if any(r.get("test64") for r in runs.values()):
+            parts.append(eval_tables(runs, "test64"))
         args.markdown.write_text("\n\n".join(parts) + "\n")
 
 

@@ -50,6 +50,13 @@ val40() {
         --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }
 
+# test64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 test objects of DATA (8 per category), to W/test64_NAME:
+# a second, larger set of objects on which to check a difference val40 found.
+test64() {
+    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split test --method affnerf --scale 0.25 --target-views 5 \
+        --max-objects 8 --mesh-resolution 96 --device cpu --out "$W/test64_$1"
+}
+
 # scored_stage NAME CORE CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the shipped weights with the plain
 # stage's schedule (fine_tune_jitter.sh: a fresh Adam, 2e-4 -> 2e-5 over 15,500 steps, stopped at 14,393) and the
 # given options, single-threaded on core CORE (this subshell and all it starts) with its frame and point cache in
