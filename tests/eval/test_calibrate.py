@@ -39,8 +39,13 @@ def test_chosen_level_is_the_sweeps_best_and_is_stored(run, train_dataset, capsy
     rows = result["levels"]
     assert [r["level"] for r in rows] == [7.0, 13.0, 300.0]
     best = max(r["fscore_1cm"] for r in rows)
-    assert result["chosen_level"] in [r["level"] for r in rows if r["fscore_1cm"] == best]
-    assert result["chosen_level"] == choose_level(rows, 50.0)
+    swept = [sweep["level"] for sweep in result["optical_depths_by_level"]]
+    assert swept[0] in [r["level"] for r in rows if r["fscore_1cm"] == best] and swept[0] == choose_level(rows, 50.0)
+    assert len(swept) == 2 and result["chosen_level"] in swept
+    by_level = {sweep["level"]: sweep["optical_depths"] for sweep in result["optical_depths_by_level"]}
+    pair = (result["chosen_level"], result["chosen_optical_depth"])
+    assert pair == calibrate.choose_level_and_depth(by_level, 50.0)
+    assert result["optical_depths"] == by_level[result["chosen_level"]]
     assert result["previous_level"] == 50.0 and result["split"] == "val" and result["resolution"] == 16
     assert len(result["objects"]) == 2 and result["stored"]
     for r in rows:
@@ -51,11 +56,10 @@ def test_chosen_level_is_the_sweeps_best_and_is_stored(run, train_dataset, capsy
     out = capsys.readouterr().out.splitlines()
     depths = [r["optical_depth"] for r in result["optical_depths"]]
     assert depths == list(calibrate.DEFAULT_OPTICAL_DEPTHS)
-    assert result["chosen_optical_depth"] == calibrate.choose_optical_depth(result["optical_depths"])
     assert loaded.model.config.surface_optical_depth == result["chosen_optical_depth"]
     assert all(r["mean_level"] <= result["chosen_level"] for r in result["optical_depths"])
-    assert len(out) == 3 + len(depths) + 1 and out[0].startswith("level 7/m: F@1cm")
-    assert out[3].startswith(f"at {result['chosen_level']:g}/m, optical depth 0:") and out[-1].startswith("chosen")
+    assert len(out) == 3 + 2 * len(depths) + 1 and out[0].startswith("level 7/m: F@1cm")
+    assert out[3].startswith(f"at {swept[0]:g}/m, optical depth 0:") and out[-1].startswith("chosen")
 
 
 def test_dry_run_leaves_the_checkpoint_byte_identical(run, train_dataset):
@@ -94,6 +98,33 @@ def test_only_the_named_categories_choose_the_level(train_dataset):
     bottles = calibrate.calibration_objects(ds, "train", 10, "bottle")
     assert {o.record.category for o in both} == {"screwdriver", "bottle"}
     assert bottles and {o.record.category for o in bottles} == {"bottle"}
+
+
+def test_the_depths_are_swept_at_the_two_best_levels_and_the_best_pair_wins(run, train_dataset, monkeypatch):
+    """Every object is a diffuse cone (peak 40/m) whose truth is the sphere its per-object level at optical depth 5
+    cuts from base level 35/m (23/m). At depth 0 both levels miss it (F = 0) and the tie goes to 20/m, nearer the
+    stored 10/m, where no depth helps (the per-object level only lowers the base): sweeping the depths at the best
+    level only keeps F = 0. With both levels swept, (35/m, depth 5) finds the sphere."""
+
+    def diffuse(points: torch.Tensor) -> torch.Tensor:
+        return 40.0 * torch.clamp(1.0 - points.norm(dim=-1) / 0.2, min=0.0)
+
+    resolution, half = 41, 0.25
+    volume = evaluate_grid(diffuse, resolution, half)
+    own = object_level(volume, 2 * half / (resolution - 1), 35.0, 5.0)
+    assert 20.0 < own < 35.0 and object_level(volume, 2 * half / (resolution - 1), 20.0, 5.0) == 20.0
+    calibrate.store_surface(resolve_checkpoint(run), 10.0, 0.0)
+    monkeypatch.setattr(calibrate, "object_grid", lambda method, obj, inputs: (volume, _upper))
+    monkeypatch.setattr(calibrate, "true_samples", lambda obj, seed: _sphere_samples(0.2 * (1.0 - own / 40.0)))
+    config = CalibrateConfig(
+        data=train_dataset, run=run, levels=(20.0, 35.0), optical_depths=(0.0, 5.0), resolution=resolution
+    )
+    result = run_calibration(config)
+    assert [r["fscore_1cm"] for r in result["levels"]] == [0.0, 0.0]
+    assert choose_level(result["levels"], 10.0) == 20.0  # the level a one-level depth sweep would have kept
+    assert (result["chosen_level"], result["chosen_optical_depth"]) == (35.0, 5.0)
+    assert result["optical_depths"][1]["fscore_1cm"] > 0.9
+    assert load_model(run).model.config.surface_density == 35.0
 
 
 def test_ties_go_to_miou_then_the_level_closest_to_the_current_one():

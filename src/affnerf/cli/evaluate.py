@@ -63,11 +63,12 @@ def calibrate(config: Annotated[CalibrateConfig, tyro.conf.arg(name="")]) -> Non
     """Choose the density level of a model's meshes (surface_density, surface_optical_depth) on a split.
 
     For up to --max-objects objects of the split (round-robin over categories), encode the protocol's input view,
-    evaluate the density grid once and run marching cubes at each of --levels; the level with the highest mean
-    F-score at 1 cm wins (ties: higher 3D mIoU, then closest to the current level). Then, at that level, each of
-    --optical-depths (the per-object level that lowers it for diffuse objects; 0 = off) is scored the same way
-    (ties: the smaller). Writes RUN/calibration.json and, unless --dry-run, stores both in the run's newest
-    checkpoint (or the --checkpoint file).
+    evaluate the density grid once and run marching cubes at each of --levels, ranked by mean F-score at 1 cm
+    (ties: higher 3D mIoU, then closest to the current level). Then, at each of the --depth-levels best levels, each
+    of --optical-depths (the per-object level that lowers it for diffuse objects; 0 = off) is scored the same way,
+    and the best (level, optical depth) pair wins (ties: as before, then the smaller depth). Writes
+    RUN/calibration.json and, unless --dry-run, stores both in the run's newest checkpoint (or the --checkpoint
+    file).
     """
     from affnerf.eval.calibrate import run_calibration, sweep_lines
 

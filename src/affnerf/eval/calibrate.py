@@ -5,10 +5,13 @@ For up to ``max_objects`` objects of the split (round-robin over categories), th
 protocol's seeded input view(s) (as in Table 2), the fine field's density is evaluated once on a grid (in the
 object's occupied cells, as :meth:`~affnerf.eval.methods.affnerf.ConditionedNeRFMethod.mesh` does), and marching
 cubes at each candidate level gives a labelled mesh scored against the object's true mesh: F-score at 1 cm,
-Chamfer-L1 and 3D affordance mIoU (an empty mesh scores F = 0). The level with the highest mean F-score wins; ties
-go to the higher 3D mIoU, then to the level closest to the current one. A second sweep, at that level, tries each
-candidate ``surface_optical_depth`` (:mod:`affnerf.predict.level`: the level lowered per object for diffuse
-objects; 0 = off) on the same grids and keeps the best the same way (ties: the smaller one). The sweeps are
+Chamfer-L1 and 3D affordance mIoU (an empty mesh scores F = 0). The levels are ranked by mean F-score (ties: the
+higher 3D mIoU, then the level closest to the current one). A second sweep, at each of the ``depth_levels`` best
+levels, tries each candidate ``surface_optical_depth`` (:mod:`affnerf.predict.level`: the level lowered per object
+for diffuse objects; 0 = off) on the same grids, and the (level, optical depth) pair with the highest mean F-score
+wins (ties: the higher 3D mIoU, the level closest to the current one, the smaller depth). Sweeping the depths at
+one level only let two near-equal levels decide the result: a lower level where no depth helps beat, by 0.002 F at
+depth 0, a higher one that a per-object level raises by 0.05 (benchmarks/results/points_schedule.md). The sweeps are
 written to ``calibration.json`` and, unless ``dry_run``, both values replace ``surface_density`` and
 ``surface_optical_depth`` in the model config stored in the checkpoint (fields that may change in a checkpoint:
 ``model.config.NON_ARCHITECTURE_FIELDS``).
@@ -57,6 +60,7 @@ class CalibrateConfig:
             training categories, so the held-out category never chooses its level.
         levels: candidate surface densities (per metre).
         optical_depths: candidate ``surface_optical_depth`` values of the second sweep (0 = per-object levels off).
+        depth_levels: how many of the best levels the second sweep tries the optical depths at.
         max_objects: at most this many objects, taken round-robin over the split's categories.
         resolution: marching-cubes samples per axis.
         input_views: views each object is encoded from, chosen by the protocol's seed (as in Table 2).
@@ -74,6 +78,7 @@ class CalibrateConfig:
     categories: str = ""
     levels: tuple[float, ...] = DEFAULT_LEVELS
     optical_depths: tuple[float, ...] = DEFAULT_OPTICAL_DEPTHS
+    depth_levels: int = 2
     max_objects: int = 16
     resolution: int = 96
     input_views: int = 1
@@ -200,18 +205,6 @@ def summarise_optical_depths(depths: tuple[float, ...], scores: list[list[Surfac
     return rows
 
 
-def choose_optical_depth(rows: list[dict[str, Any]]) -> float:
-    """The optical depth with the highest mean F-score; ties: the higher 3D mIoU, then the smaller depth.
-
-    Example:
-        >>> choose_optical_depth([{"optical_depth": 0.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3},
-        ...                       {"optical_depth": 3.0, "fscore_1cm": 0.5, "affordance_miou_3d": 0.3}])
-        0.0
-    """
-    best = max(rows, key=lambda r: (round(r["fscore_1cm"], 9), round(r["affordance_miou_3d"], 9), -r["optical_depth"]))
-    return float(best["optical_depth"])
-
-
 def _mean(values: list[float | None]) -> float | None:
     finite = [v for v in values if v is not None and math.isfinite(v)]
     return float(np.mean(finite)) if finite else None
@@ -239,6 +232,11 @@ def summarise_levels(levels: tuple[float, ...], scores: list[list[SurfaceScore]]
     return rows
 
 
+def _level_key(row: dict[str, Any], previous: float) -> tuple[float, float, float]:
+    """Sort key of a level's row: mean F-score, then 3D mIoU, then closeness to ``previous`` (higher is better)."""
+    return round(row["fscore_1cm"], 9), round(row["affordance_miou_3d"], 9), -abs(row["level"] - previous)
+
+
 def choose_level(rows: list[dict[str, Any]], previous: float) -> float:
     """The level with the highest mean F-score; ties: the higher 3D mIoU, then the level closest to ``previous``.
 
@@ -249,11 +247,37 @@ def choose_level(rows: list[dict[str, Any]], previous: float) -> float:
         >>> choose_level(rows, 50.0)
         75.0
     """
-    best = max(
-        rows,
-        key=lambda r: (round(r["fscore_1cm"], 9), round(r["affordance_miou_3d"], 9), -abs(r["level"] - previous)),
-    )
-    return float(best["level"])
+    return best_levels(rows, previous, 1)[0]
+
+
+def best_levels(rows: list[dict[str, Any]], previous: float, count: int) -> list[float]:
+    """The ``count`` best levels of the sweep, best first (ranked as :func:`choose_level`).
+
+    Example:
+        >>> rows = [{"level": 20.0, "fscore_1cm": 0.667, "affordance_miou_3d": 0.65},
+        ...         {"level": 35.0, "fscore_1cm": 0.665, "affordance_miou_3d": 0.59},
+        ...         {"level": 50.0, "fscore_1cm": 0.62, "affordance_miou_3d": 0.52}]
+        >>> best_levels(rows, 50.0, 2)
+        [20.0, 35.0]
+    """
+    ranked = sorted(rows, key=lambda r: _level_key(r, previous), reverse=True)
+    return [float(r["level"]) for r in ranked[:count]]
+
+
+def choose_level_and_depth(by_level: dict[float, list[dict[str, Any]]], previous: float) -> tuple[float, float]:
+    """The (level, optical depth) pair with the highest mean F-score over the depth sweeps at each level in
+    ``by_level``; ties: the higher 3D mIoU, the level closest to ``previous``, then the smaller depth.
+
+    Example:
+        >>> by_level = {20.0: [{"optical_depth": 0.0, "fscore_1cm": 0.667, "affordance_miou_3d": 0.65}],
+        ...             35.0: [{"optical_depth": 0.0, "fscore_1cm": 0.665, "affordance_miou_3d": 0.59},
+        ...                    {"optical_depth": 4.0, "fscore_1cm": 0.717, "affordance_miou_3d": 0.62}]}
+        >>> choose_level_and_depth(by_level, 50.0)
+        (35.0, 4.0)
+    """
+    pairs = [(level, row) for level, rows in by_level.items() for row in rows]
+    level, row = max(pairs, key=lambda p: (*_level_key({**p[1], "level": p[0]}, previous), -p[1]["optical_depth"]))
+    return float(level), float(row["optical_depth"])
 
 
 def store_surface(path: Path, level: float, optical_depth: float) -> None:
@@ -273,8 +297,10 @@ def check_config(config: CalibrateConfig) -> None:
         raise AffnerfError(f"--levels must be positive densities per metre, got {list(config.levels)}")
     if not config.optical_depths or any(not (math.isfinite(v) and v >= 0) for v in config.optical_depths):
         raise AffnerfError(f"--optical-depths must be non-negative (0 = off), got {list(config.optical_depths)}")
-    if config.resolution < 2 or config.max_objects < 1 or config.input_views < 1:
-        raise AffnerfError("--resolution must be at least 2, --max-objects and --input-views at least 1")
+    if config.resolution < 2 or min(config.max_objects, config.input_views, config.depth_levels) < 1:
+        raise AffnerfError(
+            "--resolution must be at least 2, --max-objects, --input-views and --depth-levels at least 1"
+        )
 
 
 def _load(source: Path, ds: Dataset, device: str) -> LoadedModel:
@@ -299,9 +325,30 @@ def calibration_grids(
     return grids, views
 
 
+def depth_sweeps(
+    grids: list[ObjectGrid],
+    level_scores: list[list[SurfaceScore]],
+    levels: tuple[float, ...],
+    at: list[float],
+    depths: tuple[float, ...],
+    half_extent: float,
+) -> dict[float, list[dict[str, Any]]]:
+    """The optical-depth sweep's rows (:func:`summarise_optical_depths`) at each level in ``at``, by level; each
+    object's score at the base level is taken from its level sweep (``level_scores[i][levels.index(level)]``)."""
+    by_level = {}
+    for level in at:
+        j = levels.index(level)
+        scores = [
+            sweep_optical_depths(g, depths, level, half_extent, {level: s[j]})
+            for g, s in zip(grids, level_scores, strict=True)
+        ]
+        by_level[level] = summarise_optical_depths(depths, scores)
+    return by_level
+
+
 def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
-    """Sweep the levels, then the optical depths at the chosen level, write ``calibration.json`` and (unless
-    ``dry_run``) store both choices in the checkpoint; returns what was written."""
+    """Sweep the levels, then the optical depths at the best levels, write ``calibration.json`` and (unless
+    ``dry_run``) store the chosen pair in the checkpoint; returns what was written."""
     check_config(config)
     source = model_source(config)
     resolve_checkpoint(source)  # a missing run fails before the dataset is read
@@ -315,20 +362,16 @@ def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
     previous = float(loaded.model.config.surface_density)
     level_scores = [sweep_grid(g.volume, g.labels, levels, half_extent, g.truth, g.seed) for g in grids]
     rows = summarise_levels(levels, level_scores)
-    chosen = choose_level(rows, previous)
-    at_chosen = levels.index(chosen)
-    depth_scores = [
-        sweep_optical_depths(g, depths, chosen, half_extent, {chosen: s[at_chosen]})
-        for g, s in zip(grids, level_scores, strict=True)
-    ]
-    depth_rows = summarise_optical_depths(depths, depth_scores)
-    chosen_depth = choose_optical_depth(depth_rows)
+    at = best_levels(rows, previous, config.depth_levels)
+    by_level = depth_sweeps(grids, level_scores, levels, at, depths, half_extent)
+    chosen, chosen_depth = choose_level_and_depth(by_level, previous)
     result = {
         "checkpoint": str(loaded.path),
         "split": config.split,
         "resolution": config.resolution,
         "levels": rows,
-        "optical_depths": depth_rows,
+        "optical_depths": by_level[chosen],
+        "optical_depths_by_level": [{"level": level, "optical_depths": r} for level, r in by_level.items()],
         "objects": views,
         "previous_level": previous,
         "chosen_level": chosen,
@@ -343,7 +386,8 @@ def run_calibration(config: CalibrateConfig) -> dict[str, Any]:
 
 
 def sweep_lines(result: dict[str, Any]) -> list[str]:
-    """What ``affnerf eval calibrate`` prints: one line per level, then the chosen level."""
+    """What ``affnerf eval calibrate`` prints: one line per level, one per optical depth at each level it was swept
+    at, then the chosen pair."""
     lines = []
     for row in result["levels"]:
         chamfer = "-" if row["chamfer_l1"] is None else f"{row['chamfer_l1']:.4f}"
@@ -351,11 +395,12 @@ def sweep_lines(result: dict[str, Any]) -> list[str]:
             f"level {row['level']:g}/m: F@1cm {row['fscore_1cm']:.3f}  Chamfer {chamfer}  "
             f"3D mIoU {row['affordance_miou_3d']:.3f}  (empty {row['meshes_empty']}/{len(result['objects'])})"
         )
-    for row in result["optical_depths"]:
-        lines.append(
-            f"at {result['chosen_level']:g}/m, optical depth {row['optical_depth']:g}: F@1cm {row['fscore_1cm']:.3f}  "
-            f"3D mIoU {row['affordance_miou_3d']:.3f}  (mean level {row['mean_level']:.1f}/m)"
-        )
+    for sweep in result["optical_depths_by_level"]:
+        for row in sweep["optical_depths"]:
+            lines.append(
+                f"at {sweep['level']:g}/m, optical depth {row['optical_depth']:g}: F@1cm {row['fscore_1cm']:.3f}  "
+                f"3D mIoU {row['affordance_miou_3d']:.3f}  (mean level {row['mean_level']:.1f}/m)"
+            )
     where = f"stored in {result['checkpoint']}" if result["stored"] else "dry run: checkpoint unchanged"
     lines.append(
         f"chosen level {result['chosen_level']:g}/m (was {result['previous_level']:g}/m), optical depth "
