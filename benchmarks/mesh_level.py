@@ -28,9 +28,9 @@ from affnerf.eval.calibrate import (
     CalibrateConfig,
     calibration_grids,
     calibration_objects,
-    summarise_optical_depths,
     sweep_optical_depths,
 )
+from affnerf.eval.calibration_choice import summarise_optical_depths
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.predict.loading import load_model
 

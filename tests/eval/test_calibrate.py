@@ -13,7 +13,8 @@ import torch
 from affnerf.cli.main import main
 from affnerf.data.dataset import Dataset
 from affnerf.eval import calibrate
-from affnerf.eval.calibrate import CalibrateConfig, choose_level, run_calibration
+from affnerf.eval.calibrate import CalibrateConfig, run_calibration
+from affnerf.eval.calibration_choice import choose_level, choose_level_and_depth
 from affnerf.metrics.surface import SurfaceSamples
 from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model, resolve_checkpoint
@@ -44,7 +45,7 @@ def test_chosen_level_is_the_sweeps_best_and_is_stored(run, train_dataset, capsy
     assert len(swept) == 2 and result["chosen_level"] in swept
     by_level = {sweep["level"]: sweep["optical_depths"] for sweep in result["optical_depths_by_level"]}
     pair = (result["chosen_level"], result["chosen_optical_depth"])
-    assert pair == calibrate.choose_level_and_depth(by_level, 50.0)
+    assert pair == choose_level_and_depth(by_level, 50.0)
     assert result["optical_depths"] == by_level[result["chosen_level"]]
     assert result["previous_level"] == 50.0 and result["split"] == "val" and result["resolution"] == 16
     assert len(result["objects"]) == 2 and result["stored"]
