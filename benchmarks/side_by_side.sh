@@ -64,16 +64,17 @@ test64() {
 # category, to W/surface_errors_NAME.json) and grasps on 5 validation objects of each of GRASP_CATEGORIES.
 scored_stage() {
     local name=$1 run="$W/$1" cache=$3
-    taskset -cp "$2" "$BASHPID" > /dev/null
+    taskset -cp "$2" "$BASHPID" > /dev/null  # this subshell (start it with &) and all it starts
+    export OMP_NUM_THREADS=1
     shift 3
-    OMP_NUM_THREADS=1 .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps 15500 \
+    .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps 15500 \
         --stop-at 14393 --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 --no-progress \
         --init-from src/affnerf/weights/affnerf-small.pt --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" "$@"
-    OMP_NUM_THREADS=1 .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
-    OMP_NUM_THREADS=1 val40 "$name" "$run"
-    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$run" --methods affnerf \
+    .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
+    val40 "$name" "$run"
+    .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$run" --methods affnerf \
         --out "$W/surface_errors_$name.json"
-    OMP_NUM_THREADS=1 .venv/bin/affnerf eval grasp --run "$run" --data "$DATA" --split val --max-objects 5 \
+    .venv/bin/affnerf eval grasp --run "$run" --data "$DATA" --split val --max-objects 5 \
         --categories "${GRASP_CATEGORIES:-bucket,cabinet,teapot,eyeglasses}" --no-pictures --device cpu \
         --out "$W/grasp_$name"
 }

@@ -78,6 +78,9 @@ class LogScalars:
         "loss/view_consistency",
     )
 
+    #: The step's scheduled values (floats, the same on every rank): logged as they are, never averaged.
+    SCHEDULED = ("train/lr", "train/points_weight")
+
     def __init__(
         self, config: TrainConfig, ctx: dist_utils.Context, logger: MetricsLogger, bar: tqdm, started: float
     ) -> None:
@@ -104,8 +107,7 @@ class LogScalars:
             **{key: means[key] for key in self.OPTIONAL if key in means},
             "train/psnr": -10.0 * math.log10(max(mse, 1e-10)),
             "train/affordance_accuracy": means["train/affordance_accuracy"],
-            "train/lr": float(outputs["train/lr"]),
-            **{key: float(outputs[key]) for key in ("train/points_weight",) if key in outputs},
+            **{key: float(outputs[key]) for key in self.SCHEDULED if key in outputs},
             "perf/rays_per_second": self.window_rays / max(elapsed, 1e-9),
             "time/seconds": time.perf_counter() - self.started,
         }

@@ -289,9 +289,9 @@ class Trainer:
         with ``points_weight`` > 0, ``points_per_object`` points of each object), renders the R rays coarse and
         fine from the B objects' encoded views, back-propagates the loss and steps Adam. Returns 0-d detached
         tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
-        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float; with
-        points also ``train/points_weight``, the step's μ);
-        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field; and the model's
+        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
+        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field and the step's μ
+        (``train/points_weight``, a float); and the model's
         auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
         config, state = self.config, self.state
