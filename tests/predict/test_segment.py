@@ -214,6 +214,20 @@ def test_a_box_without_pixels_of_the_image_is_an_error_naming_the_image_and_the_
         segment.segment(np.zeros((60, 80, 3), np.uint8), "auto", "photo.png", box=box)
 
 
+@pytest.mark.parametrize("box", [(10, 10, 12, 50), (10, 10, 40, 17), (395, 10, 450, 60)])
+def test_a_box_too_small_to_hold_an_object_is_an_error_naming_the_image_and_its_size(box):
+    rgb = (np.random.default_rng(0).random((60, 400, 3)) * 255).astype(np.uint8)  # cluttered: auto takes GrabCut
+    with pytest.raises(AffnerfError, match=r"photo.png: --box .* is \d+x\d+ pixels inside the image, too small"):
+        segment.segment(rgb, "auto", "photo.png", box=box)
+
+
+@needs_opencv
+def test_grabcut_on_an_image_too_small_for_its_rectangle_finds_nothing_instead_of_failing():
+    rgb = (np.random.default_rng(0).random((40, 2, 3)) * 255).astype(np.uint8)
+    assert not segment.grabcut_mask(rgb).any()
+    assert segment.grabcut_mask(np.pad(rgb, ((0, 0), (0, 1), (0, 0)))).shape == (40, 3)
+
+
 @needs_opencv
 def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_separates():
     rgb, truth = _two_objects()

@@ -36,7 +36,7 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     Exit codes: 0 done, warnings included; 2 bad input (an image that is missing, unreadable, a folder, blank or of
     one colour, an empty or mismatched mask, a run that cannot predict from photos, a --segmenter file that is
     not one or --segment segmenter without one, --segment salient or grabcut without the optional extra installed, a
-    --box that holds no pixel of the image).
+    --box that holds no pixel of the image or is narrower than 8 pixels inside it).
     """
     from affnerf.predict.outputs import write_prediction
     from affnerf.predict.predictor import Predictor

@@ -67,6 +67,9 @@ GRABCUT_SEED = 0
 #: inside boxes 5-25 % larger, 1, 2, 4 and 8 % gave 0.88, 0.87, 0.88 and 0.90. A detector's tight box needs a
 #: small margin, and a loose drawn one hardly minds.
 BOX_MARGIN = 0.02
+#: Smallest side in pixels of a ``--box`` (after clipping to the image): a narrower one cannot hold an object and
+#: its background (GrabCut needs pixels of both; one 2 pixels wide crashed OpenCV before this check).
+MIN_BOX_SIDE = 8
 #: Half-width of the unsure band of a trimap made from a mask, as a share of the image's larger side.
 TRIMAP_BAND = 0.02
 #: Smallest IoU of two methods' masks (when two ran) for a confident separation. On the composite benchmark, masks
@@ -200,6 +203,8 @@ def _grabcut_labels(rgb: np.ndarray, labels: np.ndarray | None, margin: float = 
         gc = np.zeros(bgr.shape[:2], np.uint8)
         mx, my = max(1, round(margin * size[0])), max(1, round(margin * size[1]))
         rect = (mx, my, size[0] - 2 * mx, size[1] - 2 * my)
+        if min(rect[2:]) < 1:  # an image of 2 pixels or fewer a side leaves no object pixel to start from
+            return np.zeros((h, w), bool)
         cv2.grabCut(bgr, gc, rect, bgd, fgd, GRABCUT_ITERATIONS, cv2.GC_INIT_WITH_RECT)
     else:
         gc = np.ascontiguousarray(cv2.resize(labels, size, interpolation=cv2.INTER_NEAREST))
@@ -298,7 +303,8 @@ def segment_in_box(
     there and the box's border is not of one colour), other methods run as they do on a photo.
 
     Raises:
-        AffnerfError: naming the image, when the box holds none of its pixels; as :func:`segment`.
+        AffnerfError: naming the image, when the box holds none of its pixels or is narrower than
+            :data:`MIN_BOX_SIDE` inside it; as :func:`segment`.
     """
     clipped = clip_box(box, rgb.shape)
     if clipped is None:
@@ -308,6 +314,11 @@ def segment_in_box(
             f"pixels with 0 <= X0 < X1 <= {w} and 0 <= Y0 < Y1 <= {h}"
         )
     x0, y0, x1, y1 = clipped
+    if min(x1 - x0, y1 - y0) < MIN_BOX_SIDE:
+        raise AffnerfError(
+            f"{name}: --box {' '.join(map(str, box))} is {x1 - x0}x{y1 - y0} pixels inside the image, too small to "
+            f"hold an object (at least {MIN_BOX_SIDE} pixels a side): give the rectangle around the whole object"
+        )
     sub = np.ascontiguousarray(rgb[y0:y1, x0:x1])
     if method == "auto" and opencv() is not None and background_uniformity(sub) < AUTO_UNIFORMITY:
         seg = Segmentation(grabcut_mask(sub, BOX_MARGIN), "grabcut")
@@ -334,7 +345,7 @@ def segment(
     Raises:
         AffnerfError: an unknown method; ``salient`` without the optional extra, ``grabcut`` without OpenCV,
             each naming what to install; ``segmenter`` without a segmenter file, or a file that is not one; a box
-            outside the image (exit code 2).
+            outside the image or too small to hold an object (exit code 2).
     """
     if method not in SEGMENT_METHODS:
         raise AffnerfError(f"unknown separation method {method!r}: choose one of {', '.join(SEGMENT_METHODS)}")
