@@ -97,6 +97,9 @@ class TrainConfig:
             continues to ``steps`` (0 = run to the end).
         time_limit: end this invocation after this many minutes with a checkpoint (0 = no limit); for machines
             lent in short slots: rerun with ``--resume`` until done.
+        precision: arithmetic of the forward pass, ``fp32`` (the paper) or ``bf16`` (autocast to bfloat16; weights,
+            gradients and Adam state stay float32): see :mod:`affnerf.train.precision` and
+            benchmarks/results/precision.md for its speed and quality.
         init_from: start from the weights of this checkpoint (a ``.pt`` file, the shipped model's included, or a
             run folder: its last checkpoint) instead of the seed's initialisation; the architecture must match,
             except that a concatenating field may start a FiLM one (``--model.conditioning film``; exact, the
@@ -145,6 +148,7 @@ class TrainConfig:
     progress: bool = True
     stop_at: int = 0
     time_limit: float = 0.0
+    precision: Literal["fp32", "bf16"] = "fp32"
     init_from: Path | None = None
 
 

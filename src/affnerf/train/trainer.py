@@ -45,6 +45,7 @@ from affnerf.train.loss import (
     ray_geometry_loss,
 )
 from affnerf.train.points import PointSet
+from affnerf.train.precision import forward_precision
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.schedule import learning_rate, points_weight
 from affnerf.train.state import TrainingState, initial_weights, params_checksum, prepare_run_folder
@@ -287,7 +288,8 @@ class Trainer:
 
         Sets the learning rate, draws a batch (B = ``objects_per_step`` objects, R = ``rays_per_step`` rays, and
         with ``points_weight`` > 0, ``points_per_object`` points of each object), renders the R rays coarse and
-        fine from the B objects' encoded views, back-propagates the loss and steps Adam. Returns 0-d detached
+        fine from the B objects' encoded views (forward pass and loss in the run's ``precision``), back-propagates the
+        loss and steps Adam. Returns 0-d detached
         tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
         finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
         with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field and the step's μ
@@ -306,7 +308,8 @@ class Trainer:
             batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
         points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
         mu = points_weight(config, step)
-        total, outputs = self._loss(batch, points, mu)
+        with forward_precision(config.precision, self.ctx.device):
+            total, outputs = self._loss(batch, points, mu)
         state.optimizer.zero_grad(set_to_none=True)
         total.backward()
         if config.optim.grad_clip > 0:
