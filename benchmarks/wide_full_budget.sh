@@ -6,7 +6,8 @@
 # last checkpoint's mesh level calibrated on 32 validation objects at 96^3 as the shipped model's was
 # (calibration_shipped.json); last, both models side by side on 40 validation objects (5 per category, 5 target
 # views at 100x75, 3D at 96^3; `affnerf eval --split val`). STEPS: 3.9 steps a second were measured on the 2-core
-# machine, so 22,000 in 94 min.
+# machine, so 22,000 in 94 min. EXTRA: more training options, e.g. EXTRA="--precision bf16" (precision.md: the wide
+# field 1.75x faster a step on this CPU), with WORK elsewhere and STEPS to match.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -14,10 +15,12 @@ W="${WORK:-benchmarks/.work/wide_full_budget}"
 MINUTES="${MINUTES:-100}"
 STEPS="${STEPS:-22000}"
 export OMP_NUM_THREADS=1
+# shellcheck disable=SC2086  # EXTRA is a list of options
 .venv/bin/torchrun --standalone --nproc_per_node 2 -m affnerf.cli.main train --data "$DATA" --out "$W/run" \
     --config small --steps "$STEPS" --time-limit "$MINUTES" --device cpu --checkpoint-every 2000 \
-    --keep-checkpoints 100 --val-every 0 --cache-dir "$W/cache" --no-progress \
-    --model.field-width 128 --model.color-width 64 --model.affordance-width 64 --optim.lr 1e-3 --optim.lr-final 2e-5
+    --keep-checkpoints 100 --val-every 0 --cache-dir "${CACHE:-$W/cache}" --no-progress \
+    --model.field-width 128 --model.color-width 64 --model.affordance-width 64 --optim.lr 1e-3 --optim.lr-final 2e-5 \
+    ${EXTRA:-}
 .venv/bin/python benchmarks/ablation_ladder.py --data "$DATA" --work "$W" --out "$W/score_wide.json" \
     --score-run "$W/run" --stride 2 &
 {
@@ -48,6 +51,7 @@ result = {
     "machine": wide["machine"],
     "training": {
         "command": "benchmarks/wide_full_budget.sh (torchrun, 2 processes, one thread each)",
+        "precision": load("run/config.json").get("precision", "fp32"),
         "steps": summary["step"],
         "seconds": summary["seconds"],
         "model": {"field_width": 128, "color_width": 64, "affordance_width": 64},

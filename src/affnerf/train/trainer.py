@@ -288,13 +288,12 @@ class Trainer:
 
         Sets the learning rate, draws a batch (B = ``objects_per_step`` objects, R = ``rays_per_step`` rays, and
         with ``points_weight`` > 0, ``points_per_object`` points of each object), renders the R rays coarse and
-        fine from the B objects' encoded views (forward pass and loss in the run's ``precision``), back-propagates the
-        loss and steps Adam. Returns 0-d detached
-        tensors: ``loss/total``, and ``loss/mse``, ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the
-        finest pass (the fine one, the coarse one in a coarse-only model), with the ``train/lr`` used (a float);
-        with points, also ``loss/occupancy`` and ``loss/point_affordance`` of the finest field and the step's μ
-        (``train/points_weight``, a float); and the model's
-        auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
+        fine from the B objects' encoded views (forward pass and loss in the run's ``precision``), back-propagates
+        the loss and steps Adam. Returns 0-d detached tensors: ``loss/total``, and ``loss/mse``,
+        ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the finest pass (the fine one, the coarse one in
+        a coarse-only model), with the ``train/lr`` used (a float); with points, also ``loss/occupancy`` and
+        ``loss/point_affordance`` of the finest field and the step's μ (``train/points_weight``, a float); and the
+        model's auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
         config, state = self.config, self.state
         lr = learning_rate(config, step)
