@@ -14,6 +14,7 @@ from typing import Any, Literal
 from affnerf.errors import AffnerfError, input_error
 from affnerf.fileio import read_json_file
 from affnerf.model.config import RAYS_PER_CHUNK, ModelConfig
+from affnerf.train.precision import Precision
 
 
 @dataclass(frozen=True)
@@ -148,7 +149,7 @@ class TrainConfig:
     progress: bool = True
     stop_at: int = 0
     time_limit: float = 0.0
-    precision: Literal["fp32", "bf16"] = "fp32"
+    precision: Precision = "fp32"
     init_from: Path | None = None
 
 
