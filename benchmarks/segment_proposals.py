@@ -35,10 +35,10 @@ from scipy import ndimage
 
 from affnerf.bench.environment import describe_machine
 from affnerf.data import composite as synth
-from affnerf.data.crop import crop_object
+from affnerf.data.crop import crop_object, object_bbox
 from affnerf.data.dataset import Dataset
 from affnerf.predict import salient, segment
-from affnerf.predict.loading import load_model
+from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
 THRESHOLDS = (0.5, 0.3, 0.15)
@@ -60,10 +60,9 @@ def candidates(rgb: np.ndarray, prob: np.ndarray) -> list[np.ndarray]:
         for i in np.argsort(-sizes)[:4]:
             region = labels == i + 1
             add(region)
-            ys, xs = np.nonzero(region)
-            bw, bh = xs.max() + 1 - xs.min(), ys.max() + 1 - ys.min()
-            box = (int(xs.min() - 0.1 * bw), int(ys.min() - 0.1 * bh), int(xs.max() + 1 + 0.1 * bw),
-                   int(ys.max() + 1 + 0.1 * bh))  # fmt: skip
+            x0, y0, x1, y1 = object_bbox(region)
+            bw, bh = x1 - x0, y1 - y0
+            box = (int(x0 - 0.1 * bw), int(y0 - 0.1 * bh), int(x1 + 0.1 * bw), int(y1 + 0.1 * bh))
             if min(box[2] - box[0], box[3] - box[1]) >= segment.MIN_BOX_SIDE:
                 add(segment.segment(rgb, "auto", "composite", None, box).mask)
     add(segment.grabcut_mask(rgb))
@@ -73,8 +72,7 @@ def candidates(rgb: np.ndarray, prob: np.ndarray) -> list[np.ndarray]:
 def describe(prob: np.ndarray, mask: np.ndarray) -> list[float]:
     """The 10 hand-made features of one candidate (see the module's notes)."""
     h, w = mask.shape
-    ys, xs = np.nonzero(mask)
-    x0, x1, y0, y1 = xs.min(), xs.max() + 1, ys.min(), ys.max() + 1
+    x0, y0, x1, y1 = object_bbox(mask)
     border = np.ones_like(mask)
     border[3:-3, 3:-3] = False
     edges_touched = int(x0 <= 2) + int(y0 <= 2) + int(x1 >= w - 2) + int(y1 >= h - 2)
@@ -85,18 +83,16 @@ def describe(prob: np.ndarray, mask: np.ndarray) -> list[float]:
     ]  # fmt: skip
 
 
-def table(photos, model, saliency) -> list[dict]:
+def table(photos, predictor: Predictor, saliency) -> list[dict]:
     """Per photo (category, background, rgb, truth): its candidates' IoU, features and codes."""
-    size, bg = model.model.config.encoder_resolution, model.background
+    size, bg = predictor.loaded.model.config.encoder_resolution, predictor.loaded.background
     rows = []
     for category, where, rgb, truth in photos:
         prob = saliency.saliency(rgb)
         masks = candidates(rgb, prob)
         codes = np.zeros((0, 64), np.float32)
         if masks:
-            crops = np.stack([crop_object(rgb, m, size, bg) for m in masks])
-            with torch.no_grad():
-                c = model.model.encode(torch.from_numpy(crops).permute(0, 3, 1, 2).float() / 255.0)
+            c = predictor.encode_crops(np.stack([crop_object(rgb, m, size, bg) for m in masks]))
             codes = torch.cat([c.shape, c.appearance], 1).numpy()
         rows.append({"category": category, "background": where, "iou": [segment.mask_iou(m, truth) for m in masks],
                      "features": [describe(prob, m) for m in masks], "codes": list(codes)})  # fmt: skip
@@ -182,11 +178,10 @@ def main() -> None:
     parser.add_argument("--training-photos", type=int, default=400)
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_proposals.json")
     args = parser.parse_args()
-    model = load_model(shipped_model(), torch.device("cpu"))
-    model.model.eval()
+    predictor = Predictor.load(shipped_model(), "cpu")
     saliency = salient.load_salient_model()
-    train = table(training_photos(args.train_data, args.training_photos, 100), model, saliency)
-    tests = {s: table(benchmark_photos(args.data, s), model, saliency) for s in args.seeds}
+    train = table(training_photos(args.train_data, args.training_photos, 100), predictor, saliency)
+    tests = {s: table(benchmark_photos(args.data, s), predictor, saliency) for s in args.seeds}
     result: dict = {"benchmark": "segment_proposals", "machine": describe_machine(), "settings": vars(args) | {
         "train_data": str(args.train_data), "data": str(args.data), "out": str(args.out)}, "rows": []}  # fmt: skip
     for codes in (False, True):

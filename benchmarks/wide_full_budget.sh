@@ -7,7 +7,7 @@
 # (calibration_shipped.json); last, both models side by side on 40 validation objects (5 per category, 5 target
 # views at 100x75, 3D at 96^3; `affnerf eval --split val`). STEPS: 3.9 steps a second were measured on the 2-core
 # machine, so 22,000 in 94 min. EXTRA: more training options, e.g. EXTRA="--precision bf16" (precision.md: the wide
-# field 1.75x faster a step on this CPU), with WORK elsewhere and STEPS to match.
+# field 1.7x faster a step on this CPU), with WORK elsewhere and STEPS to match.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
