@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 
 from affnerf.data.dataset import Dataset
-from affnerf.model.segmenter import SegmenterConfig, load_segmenter, object_probability
+from affnerf.errors import AffnerfError
+from affnerf.model.segmenter import SegmenterConfig, build_segmenter, load_segmenter, object_probability
 from affnerf.train import segmenter
 
 
@@ -36,9 +38,7 @@ def test_a_short_run_learns_the_masks(train_dataset, trained_segmenter):
     ds = Dataset.open(train_dataset)
     # new photos of the training objects on new clutter (the tiny dataset has one object per category to learn)
     val = segmenter.make_pool(segmenter.load_cutouts(ds, "train", 8, rng), [], 16, (48, 36), rng)
-    untrained = segmenter.mean_mask_iou(
-        segmenter.ObjectSegmenter(SegmenterConfig(base=8, levels=2, input_side=48)), *val
-    )
+    untrained = segmenter.mean_mask_iou(build_segmenter(SegmenterConfig(base=8, levels=2, input_side=48)), *val)
     trained = segmenter.mean_mask_iou(load_segmenter(trained_segmenter), *val)
     assert trained > max(0.4, untrained + 0.2), (untrained, trained)
     photo = val[0][0].permute(1, 2, 0).numpy()
@@ -51,3 +51,29 @@ def test_training_can_start_from_a_segmenter_file(train_dataset, trained_segment
     )
     segmenter.train_segmenter(cfg)
     assert load_segmenter(cfg.out).config == SegmenterConfig(base=8, levels=2, input_side=48)  # the file's shape
+
+
+def test_the_learning_rate_warms_up_then_decays():
+    rates = [segmenter.learning_rate(1e-3, s, 400) for s in range(400)]
+    assert rates[0] == pytest.approx(5e-5) and max(rates) == pytest.approx(1e-3) == rates[19]
+    assert all(a >= b for a, b in zip(rates[19:], rates[20:], strict=False)) and rates[-1] == pytest.approx(5e-5, 0.01)
+
+
+def test_training_can_start_from_the_salient_models_weights(train_dataset, tmp_path):
+    try:
+        from affnerf.predict import salient
+
+        salient.weights_path()
+        import onnx  # noqa: F401
+    except (AffnerfError, ImportError):
+        pytest.skip("the optional extra affnerf[segment] (onnx and the weights) is not installed: make install")
+    cfg = segmenter.SegmenterTrainConfig(
+        data=train_dataset, out=tmp_path / "u2.pt", steps=2, batch=2, pool=4, val_photos=2, init_salient=True,
+        precision="bf16", network=SegmenterConfig(input_side=64),
+    )  # fmt: skip
+    start = segmenter.initial_segmenter(cfg).eval()
+    photo = np.random.default_rng(0).integers(0, 255, (48, 64, 3), np.uint8)
+    record = segmenter.train_segmenter(cfg)
+    trained = load_segmenter(cfg.out)
+    assert record["steps_done"] == 2 and trained.config == SegmenterConfig(kind="u2netp", input_side=64)
+    assert not np.array_equal(object_probability(start, photo), object_probability(trained, photo))  # it learnt

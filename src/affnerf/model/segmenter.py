@@ -11,6 +11,11 @@ from ``base``), a bottleneck that adds the image's mean feature to every cell (g
 object depends on the whole photo), and a decoder that upsamples and joins each encoder stage (U-Net skips). The
 input is the photo resized so its larger side is ``input_side`` and padded to a multiple of ``2**levels``; the
 output is one logit per pixel, brought back to the photo's size.
+
+``kind="u2netp"`` swaps that network for U²-Net-p (:mod:`affnerf.model.u2netp`), the salient-object model's
+network, which ``affnerf train-segmenter --init-salient`` starts from the salient model's own weights: features
+learnt on thousands of real photographs, fine-tuned to find the dataset's families. Its input is the photo in 0..1,
+normalised here as U²-Net expects, padded to a multiple of 32.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from __future__ import annotations
 import pickle
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import torch
@@ -26,6 +32,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from affnerf.errors import input_error
+from affnerf.model.u2netp import U2NetP, normalise
 
 #: Probability above which a pixel is object.
 SEGMENTER_THRESHOLD = 0.5
@@ -36,14 +43,22 @@ class SegmenterConfig:
     """Shape of the network.
 
     Attributes:
+        kind: ``unet`` (this module's U-Net, from random weights) or ``u2netp`` (U²-Net-p, :mod:`affnerf.model.u2netp`;
+            ``base`` and ``levels`` are then unused, its five poolings pad the input to a multiple of 32).
         base: channels of the first stage (doubled at each further stage).
         levels: encoder stages (the input is padded to a multiple of 2**levels).
         input_side: larger side, in pixels, of the photo as the network sees it.
     """
 
+    kind: Literal["unet", "u2netp"] = "unet"
     base: int = 16
     levels: int = 4
     input_side: int = 192
+
+    @property
+    def multiple(self) -> int:
+        """What the network's input sides must be multiples of."""
+        return 32 if self.kind == "u2netp" else 2**self.levels
 
 
 def conv_block(c_in: int, c_out: int) -> nn.Sequential:
@@ -83,9 +98,35 @@ class ObjectSegmenter(nn.Module):
         return self.head(x)
 
 
+class SalientSegmenter(nn.Module):
+    """U²-Net-p as an object segmenter: (N, 3, H, W) images in 0..1 → (N, 1, H, W) object logits."""
+
+    def __init__(self, config: SegmenterConfig):
+        super().__init__()
+        self.config = config
+        self.net = U2NetP()
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        return self.net(normalise(images))
+
+    def side_logits(self, images: torch.Tensor) -> tuple[torch.Tensor, list[torch.Tensor]]:
+        """Fused logits and the six side outputs' logits (U²-Net's deep supervision)."""
+        return self.net.side_logits(normalise(images))
+
+
+#: Either network: both take (N, 3, H, W) images in 0..1 and carry their ``config``.
+Segmenter = ObjectSegmenter | SalientSegmenter
+
+
+def build_segmenter(config: SegmenterConfig) -> Segmenter:
+    """A new segmenter of ``config``'s kind, random weights."""
+    return SalientSegmenter(config) if config.kind == "u2netp" else ObjectSegmenter(config)
+
+
 def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tensor, tuple[int, int]]:
     """(1, 3, H', W') float input of an (H, W, 3) uint8 photo, resized to a larger side of ``input_side`` and
-    padded (edge values) at the bottom and right to multiples of 2**levels, with the resized (W, H) before padding.
+    padded (edge values) at the bottom and right to multiples of ``config.multiple``, with the resized (W, H)
+    before padding.
 
     Example:
         >>> x, size = network_input(np.zeros((300, 400, 3), np.uint8), SegmenterConfig())
@@ -96,14 +137,14 @@ def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tenso
     s = config.input_side / max(h, w)
     size = (max(1, round(w * s)), max(1, round(h * s)))
     small = np.asarray(Image.fromarray(rgb).resize(size, Image.BILINEAR), np.float32) / 255.0
-    m = 2**config.levels
+    m = config.multiple
     pad = (-size[1] % m, -size[0] % m)
     small = np.pad(small, ((0, pad[0]), (0, pad[1]), (0, 0)), mode="edge")
     return torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None], size
 
 
 @torch.no_grad()
-def object_probability(model: ObjectSegmenter, rgb: np.ndarray) -> np.ndarray:
+def object_probability(model: Segmenter, rgb: np.ndarray) -> np.ndarray:
     """(H, W) float32 probability that each pixel of the (H, W, 3) uint8 photo is the object."""
     x, (w, h) = network_input(rgb, model.config)
     logits = model(x)[0, 0, :h, :w]
@@ -112,7 +153,7 @@ def object_probability(model: ObjectSegmenter, rgb: np.ndarray) -> np.ndarray:
     return np.clip(np.asarray(full, np.float32), 0.0, 1.0)
 
 
-def save_segmenter(model: ObjectSegmenter, path: Path, provenance: dict | None = None) -> None:
+def save_segmenter(model: Segmenter, path: Path, provenance: dict | None = None) -> None:
     """Write the network's weights, its config and ``provenance`` (how it was trained) to ``path``."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
@@ -121,7 +162,7 @@ def save_segmenter(model: ObjectSegmenter, path: Path, provenance: dict | None =
     tmp.replace(path)
 
 
-def read_segmenter(path: Path) -> ObjectSegmenter:
+def read_segmenter(path: Path) -> Segmenter:
     """A new segmenter with the weights in ``path``, in eval mode (not cached: safe to train further).
 
     Raises:
@@ -129,17 +170,17 @@ def read_segmenter(path: Path) -> ObjectSegmenter:
     """
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
-        model = ObjectSegmenter(SegmenterConfig(**data["config"]))
+        model = build_segmenter(SegmenterConfig(**data["config"]))
         model.load_state_dict(data["state"])
     except (OSError, RuntimeError, KeyError, TypeError, ValueError, EOFError, pickle.UnpicklingError) as err:
         raise input_error(path, f"not an affnerf object segmenter ({err})") from err
     return model.eval()
 
 
-_LOADED: dict[Path, ObjectSegmenter] = {}
+_LOADED: dict[Path, Segmenter] = {}
 
 
-def load_segmenter(path: Path) -> ObjectSegmenter:
+def load_segmenter(path: Path) -> Segmenter:
     """The segmenter in ``path``, in eval mode, loaded once per process and file.
 
     Raises:
