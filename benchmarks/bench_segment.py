@@ -3,10 +3,11 @@
 Rendered objects (a dataset made by ``affnerf data generate``; the true mask is ``affordance > 0``) are pasted at a
 random position and scale onto photographs that ship with scikit-image (no download), with or without a soft drop
 shadow, and each method's mask is compared with the true one, also with a box around the object (``predict --box``:
-the true bounding box loosened by 5-25 % per side, and a tight one loosened by 0-5 %, seeded). Also measured: the
-salient model's and (with ``--segmenter``) a trained object segmenter's thresholds (sweeps over the same probability
-maps), GrabCut's refinement of either mask, and how well the segmenter's confidence and the methods' agreement
-flag a wrong mask. These six photographs are held out of the object segmenter's training
+the true bounding box loosened by 5-25 % per side, and a tight one loosened by 0-5 %, seeded). ``auto`` uses the
+object segmenter (the shipped one, or ``--segmenter FILE``); ``auto (no segmenter)`` is ``auto`` as it was before one
+shipped. Also measured: the salient model's and the segmenter's thresholds (sweeps over the same probability maps),
+GrabCut's refinement of either mask, and how well the segmenter's confidence and the methods' agreement flag a
+wrong mask. These six photographs are held out of the object segmenter's training
 (``affnerf.data.composite.HELD_OUT_BACKGROUNDS``), and the dataset below is made with another seed than the
 segmenter's training data, so its objects are new to it too.
 
@@ -14,7 +15,7 @@ Run::
 
     affnerf data generate --out /tmp/seg/data --objects-per-category 10 --views 4 --seed 7
     .venv/bin/python benchmarks/bench_segment.py --data /tmp/seg/data [--composites 48] [--checkpoint RUN] \
-        [--segmenter FILE]    # a segmenter from `affnerf train-segmenter` (on another dataset's training split)
+        [--segmenter FILE]    # default: the shipped one; or one from `affnerf train-segmenter`
 
 Writes ``benchmarks/results/segment_composites.json``. With ``--checkpoint`` (a run folder or checkpoint, or
 ``shipped``), a ``Predictor`` also predicts each object from its composite and from its clean render, and the
@@ -135,34 +136,40 @@ def measure_map(
     return prob, mask, sweep
 
 
-def measure_segmenter(rgb: np.ndarray, truth: np.ndarray, segmenter, path: Path) -> tuple[dict, dict, dict]:
-    """IoU and seconds of a trained object segmenter on one composite (alone, with GrabCut's edges, and as ``auto
-    --segmenter``), its threshold sweep and its confidence."""
+def measure_segmenter(
+    rgb: np.ndarray, truth: np.ndarray, segmenter, path: Path, boxes: dict
+) -> tuple[dict, dict, dict]:
+    """IoU and seconds of an object segmenter on one composite (alone, with GrabCut's edges, and alone inside each of
+    ``boxes``), its threshold sweep and its confidence."""
     iou, secs = {}, {}
     prob, mask, sweep = measure_map(
         rgb, truth, "segmenter", lambda x: segnet.object_probability(segmenter, x), segnet.SEGMENTER_THRESHOLD, iou,
         secs,
     )  # fmt: skip
-    seg, secs["auto --segmenter"] = timed(segment.segment, rgb, "auto", "composite", path)
-    iou["auto --segmenter"] = segment.mask_iou(seg.mask, truth)
+    for name, box in boxes.items():
+        seg, secs[f"segmenter --box{name}"] = timed(segment.segment, rgb, "segmenter", "composite", path, box)
+        iou[f"segmenter --box{name}"] = segment.mask_iou(seg.mask, truth)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
     return iou, secs, {"segmenter_sweep": sweep, "segmenter_confidence": confidence}
 
 
-def measure_one(rgb: np.ndarray, truth: np.ndarray, model) -> tuple[dict, dict, dict]:
-    """IoU and seconds of each method on one composite, the salient threshold sweep, and the confidence measures
-    (border uniformity; IoU of the salient and GrabCut masks)."""
+def measure_one(rgb: np.ndarray, truth: np.ndarray, model, segmenter: Path) -> tuple[dict, dict, dict]:
+    """IoU and seconds of each method on one composite (``auto`` with the object segmenter file ``segmenter``, and
+    without any, as before one shipped), the salient threshold sweep, and the confidence measures (border
+    uniformity; IoU of the salient and GrabCut masks)."""
     iou, secs = {}, {}
     mask, secs["uniform"] = timed(segment.uniform_background_mask, rgb)
     iou["uniform"] = segment.mask_iou(mask, truth)
     grabcut, secs["grabcut"] = timed(segment.grabcut_mask, rgb)
     iou["grabcut"] = segment.mask_iou(grabcut, truth)
     _, salient_only, sweep = measure_map(rgb, truth, "salient", model.saliency, salient.SALIENT_THRESHOLD, iou, secs)
-    seg, secs["auto"] = timed(segment.segment, rgb, "auto")
+    seg, secs["auto"] = timed(segment.segment, rgb, "auto", "composite", segmenter)
     iou["auto"] = segment.mask_iou(seg.mask, truth)
+    old, secs["auto (no segmenter)"] = timed(segment.segment, rgb, "auto", "composite", segment.NO_SEGMENTER)
+    iou["auto (no segmenter)"] = segment.mask_iou(old.mask, truth)
     extra = {
         "auto_source": seg.source,
-        "auto_agreement": seg.agreement,
+        "auto_agreement": old.agreement,
         "border_uniformity": segment.background_uniformity(rgb),
         "agreement_salient_grabcut": segment.mask_iou(salient_only, grabcut),
     }
@@ -209,7 +216,7 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
     out["salient_threshold_sweep"] = {str(t): mean([r["sweep"][t] for r in rows]) for t in THRESHOLDS}
     if "segmenter_sweep" in rows[0]:
         out["segmenter_threshold_sweep"] = {str(t): mean([r["segmenter_sweep"][t] for r in rows]) for t in THRESHOLDS}
-    out["confidence_of_auto_by_agreement"] = confidence(rows)
+    out["confidence_of_auto_without_segmenter_by_agreement"] = confidence(rows, "auto (no segmenter)")
     if "segmenter_confidence" in rows[0]:
         out["confidence_of_segmenter_by_its_confidence"] = confidence(
             rows, "segmenter", "segmenter_confidence", segment.MIN_SEGMENTER_CONFIDENCE
@@ -270,7 +277,9 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--checkpoint", "--run", default=None, help="also score predictions (a run, or 'shipped')")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "segment_composites.json")
-    parser.add_argument("--segmenter", type=Path, default=None, help="also measure this trained object segmenter")
+    parser.add_argument(
+        "--segmenter", type=Path, default=None, help="an object segmenter file (default: the shipped one)"
+    )
     parser.add_argument("--fit-steps", type=int, default=30, help="predictions: fit to the photo (0 = off)")
     return parser.parse_args()
 
@@ -286,7 +295,7 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "salient_threshold": salient.SALIENT_THRESHOLD,
         "auto_uniformity": segment.AUTO_UNIFORMITY,
         "refine_salient": segment.REFINE_SALIENT,
-        "segmenter": None if args.segmenter is None else str(args.segmenter),
+        "segmenter": str(args.segmenter),
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
         "onnx_threads": salient.SESSION_THREADS,
         "box_padding": BOX_PADDING,
@@ -297,6 +306,7 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
 
 def main() -> None:
     args = parse_args()
+    args.segmenter = args.segmenter or segment.resolve_segmenter(None)
     rng = np.random.default_rng(args.seed)
     ds = Dataset.open(args.data)
     entries = ds.objects()
@@ -304,9 +314,8 @@ def main() -> None:
     bgs = backgrounds()
     model = salient.load_salient_model()
     model.saliency(np.zeros((32, 32, 3), np.uint8))  # warm-up: the first run pays one-off allocations
-    segmenter = segnet.load_segmenter(args.segmenter) if args.segmenter else None
-    if segmenter is not None:
-        segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
+    segmenter = segnet.load_segmenter(args.segmenter)
+    segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
     box_rng = np.random.default_rng(args.seed + 1)  # its own stream: the composites stay those of earlier runs
     tight_rng = np.random.default_rng(args.seed + 2)
@@ -315,13 +324,13 @@ def main() -> None:
         view = int(rng.integers(len(obj.record.frames)))
         shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
         rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        iou, secs, extra = measure_one(rgb, truth, model)
+        iou, secs, extra = measure_one(rgb, truth, model, args.segmenter)
         box = padded_box(truth, box_rng)
-        boxed = measure_box(rgb, truth, {"": box, " (tight)": padded_box(truth, tight_rng, TIGHT_PADDING)})
+        boxes = {"": box, " (tight)": padded_box(truth, tight_rng, TIGHT_PADDING)}
+        boxed = measure_box(rgb, truth, boxes)
         iou, secs = {**iou, **boxed[0]}, {**secs, **boxed[1]}
-        if segmenter is not None:
-            more = measure_segmenter(rgb, truth, segmenter, args.segmenter)
-            iou, secs, extra = {**iou, **more[0]}, {**secs, **more[1]}, {**extra, **more[2]}
+        more = measure_segmenter(rgb, truth, segmenter, args.segmenter, boxes)
+        iou, secs, extra = {**iou, **more[0]}, {**secs, **more[1]}, {**extra, **more[2]}
         rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
                      "shadow": shadow, "box": box, "iou": iou, "secs": secs, **extra})  # fmt: skip
         cases.append((obj, view, rgb, box))

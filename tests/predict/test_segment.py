@@ -51,7 +51,7 @@ def no_salient_model(monkeypatch):
 @needs_extra
 def test_auto_separates_a_shape_on_a_textured_background_with_the_salient_model():
     rgb, truth = _composite()
-    seg = segment.segment(rgb, "auto")
+    seg = segment.segment(rgb, "auto", segmenter=segment.NO_SEGMENTER)  # the object segmenter left out
     assert seg.source == "salient" and seg.note is None
     assert segment.mask_iou(seg.mask, truth) > 0.8
     assert seg.compared_with == "grabcut" and seg.agreement > 0.8  # two methods ran: their agreement is recorded
@@ -83,7 +83,7 @@ def test_an_unknown_method_is_an_error():
 def test_auto_without_the_model_falls_back_to_grabcut_with_one_warning(no_salient_model, caplog):
     rgb, truth = _composite()
     with caplog.at_level(logging.WARNING, logger="affnerf"):
-        seg = segment.segment(rgb, "auto", "photo.jpg")
+        seg = segment.segment(rgb, "auto", "photo.jpg", segment.NO_SEGMENTER)
     assert seg.source == "grabcut" and segment.mask_iou(seg.mask, truth) > 0.8
     (record,) = caplog.records
     message = record.getMessage()
@@ -95,7 +95,7 @@ def test_auto_without_the_model_falls_back_to_grabcut_with_one_warning(no_salien
 def test_auto_without_model_or_opencv_falls_back_to_the_border_colour(no_salient_model, monkeypatch, caplog):
     monkeypatch.setitem(sys.modules, "cv2", None)
     with caplog.at_level(logging.WARNING, logger="affnerf"):
-        seg = segment.segment(_composite()[0], "auto", "photo.jpg")
+        seg = segment.segment(_composite()[0], "auto", "photo.jpg", segment.NO_SEGMENTER)
     assert seg.source == "uniform background" and len(caplog.records) == 1
     assert "the image border's colour" in caplog.records[0].getMessage()
 
@@ -174,9 +174,50 @@ def test_the_segmenter_method_uses_the_given_file_and_records_its_confidence(tra
     assert auto.source == "segmenter" and np.array_equal(auto.mask, seg.mask)
 
 
-def test_the_segmenter_method_without_a_file_is_an_error_saying_how_to_train_one():
-    with pytest.raises(AffnerfError, match="needs a segmenter file: train one on your objects with `affnerf train"):
+@pytest.fixture(scope="module")
+def rendered_objects(tmp_path_factory):
+    """Two bottles and two teapots (new draws, not the shipped segmenter's training objects), one 200x150 view."""
+    from affnerf.data.generate import GenerateConfig, generate_dataset
+
+    root = tmp_path_factory.mktemp("photo") / "ds"
+    config = GenerateConfig(out=root, categories="bottle,teapot", objects_per_category=2, views=1, width=200,
+                            height=150, seed=3)  # fmt: skip
+    generate_dataset(config, progress=False)
+    return root
+
+
+def test_auto_finds_a_procedural_object_on_a_photo_with_the_shipped_segmenter_and_no_extra(
+    rendered_objects, no_salient_model, caplog
+):
+    """The shipped segmenter is pure PyTorch: with neither onnxruntime nor a --segmenter file, auto uses it, and it
+    finds rendered objects on a photograph it never saw in training (scikit-image's cat)."""
+    import skimage.data
+
+    from affnerf.data.composite import cut_to_box, paste
+    from affnerf.data.dataset import Dataset
+
+    assert segment.resolve_segmenter(None) is not None  # it ships with the package
+    ds, photo = Dataset.open(rendered_objects), np.ascontiguousarray(skimage.data.chelsea()[::2, ::2])
+    hits = []
+    with caplog.at_level(logging.WARNING, logger="affnerf"):
+        for k, entry in enumerate(ds.objects()):
+            obj = ds.load_object(entry)
+            rgb, alpha = paste(np.random.default_rng(k), photo, cut_to_box(obj.rgb(0), obj.affordance(0) > 0))
+            seg = segment.segment(rgb, "auto", "photo.jpg")
+            assert seg.source == "segmenter" and 0.0 < seg.confidence <= 1.0
+            hits.append(segment.mask_iou(seg.mask, alpha > 0.5))
+    assert np.mean(hits) > 0.8 and min(hits) > 0.5 and not caplog.records, hits  # no fallback warning
+    assert segment.resolve_segmenter(segment.NO_SEGMENTER) is None
+
+
+def test_the_segmenter_method_with_none_installed_is_an_error_saying_how_to_train_one(monkeypatch):
+    from affnerf.predict import shipped
+
+    monkeypatch.setattr(shipped, "shipped_segmenter", lambda: None)
+    with pytest.raises(AffnerfError, match="needs a segmenter file .none is installed.: train one on your objects"):
         segment.segment(_composite()[0], "segmenter")
+    with pytest.raises(AffnerfError, match="needs a segmenter file"):
+        segment.segment(_composite()[0], "segmenter", segmenter=segment.NO_SEGMENTER)
 
 
 def _two_objects():

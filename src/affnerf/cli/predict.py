@@ -15,9 +15,10 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     """Predict a 3D affordance model from one image.
 
     The object is separated from its background (--mask, else --segment: by default the image's alpha, else a
-    uniform background when the border is of one colour, else an object segmenter trained with `affnerf
-    train-segmenter` on your object families when --segmenter FILE is given, else the salient-object model of the
-    optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that rectangle only, by GrabCut for auto),
+    uniform background when the border is of one colour, else the object segmenter that ships with affnerf (or one
+    trained with `affnerf train-segmenter` on your object families, --segmenter FILE; --segmenter none leaves it
+    out), else the salient-object model of the optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that
+    rectangle only, by GrabCut for auto),
     cropped, centred and resized the way training saw objects, and encoded. Unless
     --fit-steps is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is
     searched, assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on
@@ -35,8 +36,8 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
 
     Exit codes: 0 done, warnings included; 2 bad input (an image that is missing, unreadable, a folder, blank or of
     one colour, an empty or mismatched mask, a run that cannot predict from photos, a --segmenter file that is
-    not one or --segment segmenter without one, --segment salient or grabcut without the optional extra installed, a
-    --box that holds no pixel of the image or is narrower than 8 pixels inside it).
+    not one or --segment segmenter with none to use, --segment salient or grabcut without the optional extra
+    installed, a --box that holds no pixel of the image or is narrower than 8 pixels inside it).
     """
     from affnerf.predict.outputs import write_prediction
     from affnerf.predict.predictor import Predictor

@@ -1,10 +1,10 @@
-"""The object segmenter: a small U-Net that finds the object of a photo among clutter, trained on our renders.
+"""The object segmenter: a network that finds the object of a photo among clutter, trained on our renders.
 
 A generic salient-object model marks what stands out, which in a cluttered photo is often something else (a cup,
 a face, a cat). This network is trained (:mod:`affnerf.train.segmenter`, ``affnerf train-segmenter``) on a dataset's
 own object families pasted onto photographs and synthetic clutter, so it looks for *those* objects, as a detector
-trained on its classes does. It is pure PyTorch and runs in a fraction of a second on a CPU. None ships with
-affnerf: see ``benchmarks/results/segment_composites.json`` for how one trained on 2 CPU cores fares.
+trained on its classes does. It is pure PyTorch and runs in a fraction of a second on a CPU. One ships with affnerf
+(``kind="u2netp"``, :func:`affnerf.predict.shipped.shipped_segmenter`; ``benchmarks/results/segmenter_u2netp.md``).
 
 Network: an encoder of ``levels`` stages (two 3×3 conv + batch norm + ReLU, then 2× max pooling, channels doubling
 from ``base``), a bottleneck that adds the image's mean feature to every cell (global context: which blob is the

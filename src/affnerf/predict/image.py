@@ -242,10 +242,10 @@ def prepare_image(
         background: the training background colour the crop is placed on.
         mask: optional mask image (white or opaque = object), same size as the photo; it overrides ``segment``.
         segment: how to separate the object without a mask (:data:`affnerf.predict.segment.SEGMENT_METHODS`):
-            ``auto`` (alpha, else a uniform background, else the salient model), ``salient``, ``grabcut``,
-            ``uniform`` or ``none`` (the whole image is the object).
+            ``auto`` (alpha, else a uniform background, else the object segmenter, else the salient model),
+            ``segmenter``, ``salient``, ``grabcut``, ``uniform`` or ``none`` (the whole image is the object).
         segmenter: an object segmenter file (``affnerf train-segmenter``) for ``segmenter``, and for ``auto``
-            before the salient model.
+            before the salient model; ``None`` for the shipped one, ``segment.NO_SEGMENTER`` for none.
 
     Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), and when
     ``auto`` falls back because the optional salient model is not installed.

@@ -51,13 +51,14 @@ class PredictConfig:
         run: a run folder or checkpoint (default: the model shipped with affnerf).
         mask: optional mask image (white or opaque = object), same size as the photo; it overrides ``segment``.
         segment: how to separate the object from its background without ``mask``: ``auto`` (the image's alpha,
-            else a uniform background when the border is of one colour, else the ``segmenter`` file when given,
-            else the salient-object model of the optional extra ``affnerf[segment]``, falling back to GrabCut with
-            a warning without it), ``segmenter``, ``salient``, ``grabcut`` (OpenCV, from a centred rectangle),
-            ``uniform`` (the border's colour) or ``none`` (the whole image is the object). The mask used is
-            written as ``mask.png``.
-        segmenter: an object segmenter trained with ``affnerf train-segmenter`` on your own object families, for
-            ``segment`` ``segmenter`` (required there) or ``auto`` (tried before the salient model).
+            else a uniform background when the border is of one colour, else the object segmenter when it finds
+            an object, else the salient-object model of the optional extra ``affnerf[segment]``, falling back to
+            GrabCut with a warning without it), ``segmenter``, ``salient``, ``grabcut`` (OpenCV, from a centred
+            rectangle), ``uniform`` (the border's colour) or ``none`` (the whole image is the object). The mask
+            used is written as ``mask.png``.
+        segmenter: the object segmenter of ``segment`` ``segmenter`` and ``auto`` (tried before the salient model):
+            a file from ``affnerf train-segmenter`` (your own object families), ``none`` to leave it out, or unset
+            for the one shipped with affnerf (U²-Net-p fine-tuned on the procedural families).
         box: X0 Y0 X1 Y1, the rectangle of the photo the object lies in (pixels from the top-left corner, X1 and
             Y1 exclusive), as a detector or a drawn box gives it: ``segment`` runs inside it only, and everything
             outside is background (``auto``: GrabCut from the box, the surest separation on a cluttered photo).

@@ -2,18 +2,19 @@
 
 - ``uniform``: the object is what differs from the colour of the image border (a clean backdrop).
 - ``grabcut``: OpenCV's GrabCut, started from a centred rectangle (the object is assumed inside it).
-- ``segmenter``: an object segmenter trained on your own object families with ``affnerf train-segmenter``
-  (:mod:`affnerf.model.segmenter`, given as a file), largest connected component. Its confidence is the mean
-  probability it gives the pixels of its own mask; below :data:`MIN_SEGMENTER_CONFIDENCE` the separation is
-  doubtful. None ships: one trained for 80 minutes of 2 CPU cores on the procedural families found the object on
-  the composite benchmark's held-out photographs less often than GrabCut (``benchmarks/bench_segment.py``).
+- ``segmenter``: an object segmenter (:mod:`affnerf.model.segmenter`): the one that ships with affnerf (U²-Net-p
+  fine-tuned to find the procedural families among clutter, :func:`affnerf.predict.shipped.shipped_segmenter`),
+  or one trained on your own object families with ``affnerf train-segmenter`` and given as a file; largest
+  connected component. Its confidence is the mean probability it gives the pixels of its own mask; below
+  :data:`MIN_SEGMENTER_CONFIDENCE` the separation is doubtful.
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
 - ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
-  the object segmenter when a file is given (and it finds something), else the salient model; without the optional
-  extra ``affnerf[segment]`` it falls back to GrabCut (OpenCV) or the uniform estimate, with one warning line. When
-  the salient model ran and OpenCV is there, GrabCut from the centred rectangle also runs, and the two masks' IoU
-  is the ``agreement`` recorded with the separation; when they disagree (IoU < :data:`MIN_AGREEMENT`), ``auto``
-  takes GrabCut's mask, and the separation is doubtful.
+  the object segmenter (the given file, else the shipped one) when it finds something, else the salient model;
+  without the optional extra ``affnerf[segment]`` that last step falls back to GrabCut (OpenCV) or the uniform
+  estimate, with one warning line. When the salient model ran and OpenCV is there, GrabCut from the centred
+  rectangle also runs, and the two masks' IoU is the ``agreement`` recorded with the separation; when they disagree
+  (IoU < :data:`MIN_AGREEMENT`), ``auto`` takes GrabCut's mask, and the separation is doubtful. ``segmenter=
+  NO_SEGMENTER`` (``--segmenter none``) leaves the object segmenter out.
 - ``none``: the whole image is the object.
 
 With a box (``--box X0 Y0 X1 Y1``, the rectangle of the photo the object lies in, as a detector or a click-and-drag
@@ -83,6 +84,8 @@ REFINE_SALIENT = True
 MIN_SEGMENTER_CONFIDENCE = 0.8
 #: How to get an object segmenter (the words of the error when one is needed and not given).
 TRAIN_HINT = "train one on your objects with `affnerf train-segmenter --data DATA --out FILE` and pass --segmenter FILE"
+#: The ``segmenter`` argument (``--segmenter none``) that leaves the object segmenter out, shipped one included.
+NO_SEGMENTER = Path("none")
 
 logger = logging.getLogger(__name__)
 
@@ -264,12 +267,22 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
 def segmenter_segmentation(rgb: np.ndarray, model) -> Segmentation:
     """The object segmenter's mask (probability above :data:`~affnerf.model.segmenter.SEGMENTER_THRESHOLD`, largest
     component) and its confidence, the mean probability over the mask (0 when the mask is empty). GrabCut's edges
-    are not drawn on it: ``bench_segment.py`` measures them (0.366 → 0.413 mean mask IoU with the one segmenter
-    trained), to be switched on with a segmenter worth shipping."""
+    are not drawn on it: with the shipped segmenter they moved the composite benchmark's mean mask IoU by +0.012
+    (0.748 → 0.760) for 0.1 s an image, within the noise of one benchmark run."""
     prob = object_probability(model, rgb)
     mask = largest_component(prob > SEGMENTER_THRESHOLD)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
     return Segmentation(mask, "segmenter", confidence=confidence)
+
+
+def resolve_segmenter(segmenter: Path | None) -> Path | None:
+    """The object segmenter file to use: ``segmenter`` itself, the shipped one for ``None`` (``None`` when none is
+    installed), and ``None`` for :data:`NO_SEGMENTER`."""
+    if segmenter is None:
+        from affnerf.predict.shipped import shipped_segmenter
+
+        return shipped_segmenter()
+    return None if Path(segmenter) == NO_SEGMENTER else Path(segmenter)
 
 
 def _fallback(rgb: np.ndarray, err: SalientUnavailable, name: str) -> Segmentation:
@@ -339,12 +352,12 @@ def segment(
     """Separate the object of an (H, W, 3) uint8 photo with ``method`` (one of :data:`SEGMENT_METHODS`).
 
     ``name`` (the photo's path) starts the fallback warning of ``auto``; ``segmenter`` is an object segmenter file
-    (``affnerf train-segmenter``), used by ``segmenter`` and, when given, by ``auto``; ``box`` confines the
-    separation to a rectangle (:func:`segment_in_box`).
+    (``affnerf train-segmenter``) for ``segmenter`` and ``auto``, ``None`` for the shipped one, or
+    :data:`NO_SEGMENTER`; ``box`` confines the separation to a rectangle (:func:`segment_in_box`).
 
     Raises:
         AffnerfError: an unknown method; ``salient`` without the optional extra, ``grabcut`` without OpenCV,
-            each naming what to install; ``segmenter`` without a segmenter file, or a file that is not one; a box
+            each naming what to install; ``segmenter`` with no segmenter to use, or a file that is not one; a box
             outside the image or too small to hold an object (exit code 2).
     """
     if method not in SEGMENT_METHODS:
@@ -357,10 +370,11 @@ def segment(
         return Segmentation(uniform_background_mask(rgb), "uniform background")
     if method == "grabcut":
         return Segmentation(grabcut_mask(rgb), "grabcut")
-    if method == "segmenter" and segmenter is None:
-        raise AffnerfError(f"--segment segmenter needs a segmenter file: {TRAIN_HINT}")
-    if segmenter is not None and method in ("segmenter", "auto"):
-        seg = segmenter_segmentation(rgb, load_segmenter(segmenter))
+    found = resolve_segmenter(segmenter) if method in ("segmenter", "auto") else None
+    if method == "segmenter" and found is None:
+        raise AffnerfError(f"--segment segmenter needs a segmenter file (none is installed): {TRAIN_HINT}")
+    if found is not None:
+        seg = segmenter_segmentation(rgb, load_segmenter(found))
         if method == "segmenter" or seg.mask.any():
             return seg
     try:

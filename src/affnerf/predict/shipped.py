@@ -1,4 +1,8 @@
-"""The model shipped with affnerf (``MODEL_CARD.md`` says how it was trained), and how a run becomes one.
+"""The models shipped with affnerf (``MODEL_CARD.md`` says how they were trained), and how a run becomes one.
+
+Two files ship in :mod:`affnerf.weights`: the AFF-NeRF model (``affnerf-small.pt``) and the object segmenter that
+``predict --segment auto`` separates cluttered photos with (``segmenter-u2netp.pt``: U²-Net-p fine-tuned on the
+procedural families, :mod:`affnerf.model.segmenter`).
 
 ``python -m affnerf.predict.shipped RUN OUT.pt`` writes RUN's last checkpoint without its optimiser and random
 states (what prediction needs, about a third of the size); the shipped model was made this way.
@@ -18,6 +22,7 @@ from affnerf.predict.loading import resolve_checkpoint
 from affnerf.train.checkpoint import load_checkpoint
 
 SHIPPED_NAME = "affnerf-small.pt"
+SHIPPED_SEGMENTER_NAME = "segmenter-u2netp.pt"
 
 #: Checkpoint entries that inference reads (:func:`affnerf.predict.loading.load_model`).
 INFERENCE_KEYS = (
@@ -42,6 +47,12 @@ def shipped_model() -> Path:
     if not path.is_file():
         raise AffnerfError(f"no --run given and no shipped model at {path}; train one with `affnerf train`")
     return path
+
+
+def shipped_segmenter() -> Path | None:
+    """The shipped object segmenter's path, ``None`` when this installation has none."""
+    path = Path(str(resources.files("affnerf.weights").joinpath(SHIPPED_SEGMENTER_NAME)))
+    return path if path.is_file() else None
 
 
 def export_for_inference(run: Path, out: Path) -> Path:
