@@ -299,3 +299,16 @@ def test_a_segmenter_file_that_is_not_one_is_exit_2_naming_it(trained_runs, tiny
     assert main(args) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "seg.pt: not an affnerf object segmenter" in err and not out.exists()
+
+
+def test_segmenter_none_leaves_the_shipped_segmenter_out(trained_runs, photo, tmp_path, capsys):
+    clutter = tmp_path / "clutter.png"
+    Image.fromarray(np.random.default_rng(0).integers(0, 255, (60, 80, 3), np.uint8)).save(clutter)
+    out = tmp_path / "pred"
+    args = _tiny_args(trained_runs, out) + ["--image", str(clutter), "--segment", "segmenter", "--segmenter", "none"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--segment segmenter needs a segmenter file" in err and not out.exists()
+    auto = _tiny_args(trained_runs, out) + ["--image", str(photo["rgb"]), "--fit-steps", "0", "--segmenter", "none"]
+    assert main(auto) == 0  # a clean render: auto takes the uniform background, no segmenter needed
+    assert json.loads((out / "prediction.json").read_text())["separation"]["source"] == "uniform background"
