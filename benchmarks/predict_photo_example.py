@@ -5,15 +5,16 @@ scikit-image photograph; the same seeded draws, so composite K here is composite
 with no alpha channel, and ``affnerf predict --image photo.png --out DIR`` runs on it with no flags (the shipped
 model, ``--segment auto``). Each row of the picture shows the photo | ``DIR/mask.png`` (the mask predict used) |
 ``DIR/turntable/000.png`` (the predicted object's front view: RGB | affordance overlay), with how predict
-separated the object and the mask's IoU against the true mask. The default rows are composite 2 (a bucket on the
-cat photograph, where the separation works) and composite 1 (a bottle on the coffee-cup photograph, where the cup
-is taken for the object: the common failure), then composite 1 again with ``--box`` (``--boxed 1``: the box
-``bench_segment.py`` drew for it, the true bounding box loosened by 5-25 % per side; drawn on the photo).
+separated the object and the mask's IoU against the true mask. The default rows are composite 1 (a bottle on the
+coffee-cup photograph: the shipped segmenter finds the bottle, where the salient model and GrabCut took the cup)
+and composite 0 (thin scissors on the astronaut photograph, where it fails: the common failure), then composite 0
+again with ``--box`` (``--boxed 0``: the box ``bench_segment.py`` drew for it, the true bounding box loosened by
+5-25 % per side; drawn on the photo).
 
 Run::
 
     affnerf data generate --out /tmp/seg/data --objects-per-category 10 --views 4 --seed 7
-    .venv/bin/python benchmarks/predict_photo_example.py --data /tmp/seg/data [--rows 2 1] [--keep /tmp/seg/example]
+    .venv/bin/python benchmarks/predict_photo_example.py --data /tmp/seg/data [--rows 1 0] [--keep /tmp/seg/example]
 """
 
 from __future__ import annotations
@@ -94,8 +95,8 @@ def row(k: int, object_id: str, background: str, photo: np.ndarray, out: Path, i
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
-    parser.add_argument("--rows", type=int, nargs="+", default=[2, 1], help="composites of bench_segment.py")
-    parser.add_argument("--boxed", type=int, nargs="*", default=[1], help="composites also predicted with --box")
+    parser.add_argument("--rows", type=int, nargs="+", default=[1, 0], help="composites of bench_segment.py")
+    parser.add_argument("--boxed", type=int, nargs="*", default=[0], help="composites also predicted with --box")
     parser.add_argument("--seed", type=int, default=0, help="bench_segment.py's --seed")
     parser.add_argument("--keep", type=Path, default=None, help="keep each photo.png and predict's folder here")
     parser.add_argument("--picture", type=Path, default=Path(__file__).parents[1] / "docs" / "predict_photo.png")
