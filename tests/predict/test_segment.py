@@ -208,6 +208,7 @@ def test_auto_finds_a_procedural_object_on_a_photo_with_the_shipped_segmenter_an
             hits.append(segment.mask_iou(seg.mask, alpha > 0.5))
     assert np.mean(hits) > 0.8 and min(hits) > 0.5 and not caplog.records, hits  # no fallback warning
     assert segment.resolve_segmenter(segment.NO_SEGMENTER) is None
+    assert segment.resolve_segmenter(segment.SHIPPED_SEGMENTER) == segment.resolve_segmenter(None)  # the CLI default
 
 
 def test_the_segmenter_method_with_none_installed_is_an_error_saying_how_to_train_one(monkeypatch):

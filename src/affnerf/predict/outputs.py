@@ -36,7 +36,7 @@ from affnerf.predict.image import save_mask
 from affnerf.predict.invert import InversionConfig, InversionResult
 from affnerf.predict.mesh import class_areas
 from affnerf.predict.predictor import EncodedObject, Predictor, turntable_poses
-from affnerf.predict.segment import SegmentMethod
+from affnerf.predict.segment import SHIPPED_SEGMENTER, SegmentMethod
 
 logger = logging.getLogger(__name__)
 
@@ -57,8 +57,8 @@ class PredictConfig:
             rectangle), ``uniform`` (the border's colour) or ``none`` (the whole image is the object). The mask
             used is written as ``mask.png``.
         segmenter: the object segmenter of ``segment`` ``segmenter`` and ``auto`` (tried before the salient model):
-            a file from ``affnerf train-segmenter`` (your own object families), ``none`` to leave it out, or unset
-            for the one shipped with affnerf (U²-Net-p fine-tuned on the procedural families).
+            a file from ``affnerf train-segmenter`` (your own object families), ``none`` to leave it out, or
+            ``shipped`` for the one shipped with affnerf (U²-Net-p fine-tuned on the procedural families).
         box: X0 Y0 X1 Y1, the rectangle of the photo the object lies in (pixels from the top-left corner, X1 and
             Y1 exclusive), as a detector or a drawn box gives it: ``segment`` runs inside it only, and everything
             outside is background (``auto``: GrabCut from the box, the surest separation on a cluttered photo).
@@ -87,7 +87,7 @@ class PredictConfig:
     run: Path | None = None
     mask: Path | None = None
     segment: SegmentMethod = "auto"
-    segmenter: Path | None = None
+    segmenter: Path = SHIPPED_SEGMENTER
     box: tuple[int, int, int, int] | None = None
     views: int = 12
     width: int = 200

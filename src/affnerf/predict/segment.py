@@ -86,6 +86,8 @@ MIN_SEGMENTER_CONFIDENCE = 0.8
 TRAIN_HINT = "train one on your objects with `affnerf train-segmenter --data DATA --out FILE` and pass --segmenter FILE"
 #: The ``segmenter`` argument (``--segmenter none``) that leaves the object segmenter out, shipped one included.
 NO_SEGMENTER = Path("none")
+#: The ``segmenter`` argument (``--segmenter shipped``, the command's default; ``None`` in Python) for the shipped one.
+SHIPPED_SEGMENTER = Path("shipped")
 
 logger = logging.getLogger(__name__)
 
@@ -276,9 +278,9 @@ def segmenter_segmentation(rgb: np.ndarray, model) -> Segmentation:
 
 
 def resolve_segmenter(segmenter: Path | None) -> Path | None:
-    """The object segmenter file to use: ``segmenter`` itself, the shipped one for ``None`` (``None`` when none is
-    installed), and ``None`` for :data:`NO_SEGMENTER`."""
-    if segmenter is None:
+    """The object segmenter file to use: ``segmenter`` itself, the shipped one for ``None`` or
+    :data:`SHIPPED_SEGMENTER` (``None`` when none is installed), and ``None`` for :data:`NO_SEGMENTER`."""
+    if segmenter is None or Path(segmenter) == SHIPPED_SEGMENTER:
         from affnerf.predict.shipped import shipped_segmenter
 
         return shipped_segmenter()
