@@ -3,11 +3,15 @@ runs."""
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import fields
+from pathlib import Path
 
 import torch
 
+from affnerf.errors import AffnerfError
 from affnerf.model.config import ModelConfig
+from affnerf.model.u2netp import weights_path
 from affnerf.train.config import SMALL, TrainConfig
 
 #: A model small enough to train for a few steps in a test.
@@ -87,3 +91,18 @@ def straight_and_resumed_weights(straight: TrainConfig, stop_at: int) -> tuple[d
     a = torch.load(straight.out / "checkpoints" / name, weights_only=True)["model"]
     b = torch.load(halves.out / "checkpoints" / name, weights_only=True)["model"]
     return a, b
+
+
+#: Why a test that needs the optional extra ``affnerf[segment]`` is skipped.
+SEGMENT_EXTRA_MISSING = "the optional extra affnerf[segment] is not installed: make install installs it"
+
+
+def salient_weights(*modules: str) -> Path | None:
+    """The installed U²-Net-p ONNX file when the optional extra is there and ``modules`` import, else ``None``."""
+    try:
+        path = weights_path()
+        for module in modules:
+            importlib.import_module(module)
+    except (AffnerfError, ImportError):
+        return None
+    return path

@@ -5,23 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from support import SEGMENT_EXTRA_MISSING, salient_weights
 
 from affnerf.errors import AffnerfError
 from affnerf.model import segmenter as segnet
-from affnerf.model.u2netp import RSU, U2NetP, execution_order, load_onnx_weights
+from affnerf.model.u2netp import RSU, U2NetP, check_weights, execution_order, load_onnx_weights
+from affnerf.predict import salient
 
-try:
-    from affnerf.predict import salient
-
-    WEIGHTS = salient.weights_path()
-    import onnx  # noqa: F401
-    import onnxruntime  # noqa: F401
-except (AffnerfError, ImportError):
-    WEIGHTS = None
-
-needs_extra = pytest.mark.skipif(
-    WEIGHTS is None, reason="the optional extra affnerf[segment] (onnx, onnxruntime, the weights) is not installed"
-)
+WEIGHTS = salient_weights("onnx", "onnxruntime")
+needs_extra = pytest.mark.skipif(WEIGHTS is None, reason=SEGMENT_EXTRA_MISSING)
 
 
 @pytest.mark.parametrize("height, pooled", [(7, True), (4, True), (4, False)])
@@ -45,7 +37,7 @@ def test_the_network_gives_one_logit_a_pixel_and_six_side_outputs():
 def test_the_onnx_weights_reproduce_onnxruntime():
     import skimage.data
 
-    net = load_onnx_weights(U2NetP(), WEIGHTS).eval()
+    net = load_onnx_weights(U2NetP(), check_weights(WEIGHTS), WEIGHTS).eval()
     photo = np.ascontiguousarray(skimage.data.coffee()[::2, ::2])
     x = salient.preprocess(photo)
     session = salient.load_salient_model().session
@@ -70,7 +62,7 @@ def test_an_onnx_file_of_another_network_is_refused_naming_it(tmp_path):
     path = tmp_path / "tiny.onnx"
     onnx.save(helper.make_model(graph), str(path))
     with pytest.raises(AffnerfError, match="tiny.onnx: 1 convolutions, U²-Net-p has 119"):
-        load_onnx_weights(U2NetP(), path)
+        load_onnx_weights(U2NetP(), path.read_bytes(), path)
 
 
 def test_a_u2netp_segmenter_pads_to_32_and_survives_save_and_load(tmp_path):

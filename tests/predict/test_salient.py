@@ -4,19 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import SEGMENT_EXTRA_MISSING, salient_weights
 
 from affnerf.errors import AffnerfError
 from affnerf.predict import salient
 
-try:
-    WEIGHTS = salient.weights_path()
-    import onnxruntime  # noqa: F401
-except (AffnerfError, ImportError):
-    WEIGHTS = None
-
-needs_extra = pytest.mark.skipif(
-    WEIGHTS is None, reason="the optional extra affnerf[segment] is not installed: make install installs it"
-)
+WEIGHTS = salient_weights("onnxruntime")
+needs_extra = pytest.mark.skipif(WEIGHTS is None, reason=SEGMENT_EXTRA_MISSING)
 
 
 @needs_extra

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from support import SEGMENT_EXTRA_MISSING, salient_weights
 
 from affnerf.data.dataset import Dataset
-from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import SegmenterConfig, build_segmenter, load_segmenter, object_probability
 from affnerf.train import segmenter
 
@@ -60,13 +60,8 @@ def test_the_learning_rate_warms_up_then_decays():
 
 
 def test_training_can_start_from_the_salient_models_weights(train_dataset, tmp_path):
-    try:
-        from affnerf.predict import salient
-
-        salient.weights_path()
-        import onnx  # noqa: F401
-    except (AffnerfError, ImportError):
-        pytest.skip("the optional extra affnerf[segment] (onnx and the weights) is not installed: make install")
+    if salient_weights("onnx") is None:
+        pytest.skip(SEGMENT_EXTRA_MISSING)
     cfg = segmenter.SegmenterTrainConfig(
         data=train_dataset, out=tmp_path / "u2.pt", steps=2, batch=2, pool=4, val_photos=2, init_salient=True,
         precision="bf16", network=SegmenterConfig(input_side=64),

@@ -179,8 +179,9 @@ def execution_order(model: U2NetP) -> list[nn.Conv2d]:
     return order
 
 
-def load_onnx_weights(model: U2NetP, path: Path) -> U2NetP:
-    """Copy the convolutions of the U²-Net-p ONNX file at ``path`` into ``model`` (in place), in execution order.
+def load_onnx_weights(model: U2NetP, data: bytes, path: Path) -> U2NetP:
+    """Copy the convolutions of a U²-Net-p ONNX file (its bytes ``data``, as :func:`check_weights` returns them;
+    ``path`` names it in errors) into ``model`` (in place), in execution order.
 
     Raises:
         AffnerfError: the ``onnx`` package is missing, or the file's graph is not U²-Net-p (naming the file).
@@ -190,7 +191,7 @@ def load_onnx_weights(model: U2NetP, path: Path) -> U2NetP:
         from onnx import numpy_helper
     except ImportError as err:
         raise AffnerfError("reading U²-Net-p's ONNX weights needs the onnx package: pip install onnx") from err
-    graph = onnx.load(str(path)).graph
+    graph = onnx.load_model_from_string(data).graph
     tensors = {t.name: numpy_helper.to_array(t) for t in graph.initializer}
     nodes = [n for n in graph.node if n.op_type == "Conv"]
     convs = execution_order(model)

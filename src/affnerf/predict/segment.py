@@ -38,6 +38,7 @@ from scipy import ndimage
 
 from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import SEGMENTER_THRESHOLD, load_segmenter, object_probability
+from affnerf.predict import shipped
 from affnerf.predict.salient import INSTALL_HINT, SalientUnavailable, load_salient_model, salient_mask
 
 #: The separation methods of ``--segment``.
@@ -281,9 +282,7 @@ def resolve_segmenter(segmenter: Path | None) -> Path | None:
     """The object segmenter file to use: ``segmenter`` itself, the shipped one for ``None`` or
     :data:`SHIPPED_SEGMENTER` (``None`` when none is installed), and ``None`` for :data:`NO_SEGMENTER`."""
     if segmenter is None or Path(segmenter) == SHIPPED_SEGMENTER:
-        from affnerf.predict.shipped import shipped_segmenter
-
-        return shipped_segmenter()
+        return shipped.shipped_segmenter()
     return None if Path(segmenter) == NO_SEGMENTER else Path(segmenter)
 
 

@@ -25,7 +25,14 @@ from torch.nn import functional as F
 from affnerf.data.composite import Cutout, cut_to_box, photo_library, training_photo
 from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
-from affnerf.model.segmenter import Segmenter, SegmenterConfig, build_segmenter, read_segmenter, save_segmenter
+from affnerf.model.segmenter import (
+    SalientSegmenter,
+    Segmenter,
+    SegmenterConfig,
+    build_segmenter,
+    read_segmenter,
+    save_segmenter,
+)
 from affnerf.train.augment import blur_and_noise, jitter_colour
 from affnerf.train.precision import Precision, forward_precision
 
@@ -126,8 +133,7 @@ def initial_segmenter(cfg: SegmenterTrainConfig) -> Segmenter:
 
     model = build_segmenter(replace(cfg.network, kind="u2netp"))
     path = weights_path()
-    check_weights(path)
-    load_onnx_weights(model.net, path)
+    load_onnx_weights(model.net, check_weights(path), path)
     return model
 
 
@@ -157,7 +163,7 @@ def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor
 def step_loss(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
     """The training loss of one batch: :func:`segmentation_loss` of the output, and for U²-Net-p also the mean
     binary cross-entropy of its six side outputs (its deep supervision)."""
-    if not hasattr(model, "side_logits"):
+    if not isinstance(model, SalientSegmenter):
         return segmentation_loss(model(images), masks)
     fused, sides = model.side_logits(images)
     side_bce = torch.stack([F.binary_cross_entropy_with_logits(s.float(), masks) for s in sides]).mean()
