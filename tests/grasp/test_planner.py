@@ -312,3 +312,16 @@ def test_a_mesh_predict_wrote_is_planned_with_the_predicted_clearance(tmp_path):
     assert default_clearance(mesh) == WIDTH_CLEARANCE  # a dataset or user mesh
     (tmp_path / "prediction.json").write_text("{}")
     assert default_clearance(mesh) == PREDICTED_CLEARANCE > WIDTH_CLEARANCE
+
+
+def test_ranking_by_hold_orders_by_the_weight_carried_through_the_turn(screwdriver):
+    config = PlanConfig(num=12, refine=RefineConfig(steps=0))
+    by_epsilon = plan_grasps(screwdriver, config)
+    by_hold = plan_grasps(screwdriver, replace(config, rank="hold"))
+    holds = [g.hold for g in by_hold]
+    assert holds == sorted(holds, reverse=True) and holds[0] > 0
+    epsilons = [g.epsilon for g in by_epsilon]
+    assert epsilons == sorted(epsilons, reverse=True)
+    # the same candidates, ranked another way: the best hold is found first, and the epsilon ranking's is no better
+    assert by_hold[0].hold >= max(g.hold for g in by_epsilon)
+    assert by_hold[0].to_json()["hold"] == pytest.approx(by_hold[0].hold, abs=1e-6)

@@ -1,4 +1,4 @@
-"""Ferrari-Canny epsilon: pure functions checked against hand-built cases."""
+"""Ferrari-Canny epsilon and the hold quality: pure functions checked against hand-built cases."""
 
 from __future__ import annotations
 
@@ -10,7 +10,19 @@ import trimesh
 from scipy.optimize import minimize
 
 from affnerf.grasp.gripper import grasp_pose
-from affnerf.grasp.quality import contact_wrenches, ferrari_canny, friction_cone, hull_margin
+from affnerf.grasp.quality import (
+    MU,
+    TORSION,
+    contact_wrenches,
+    ferrari_canny,
+    friction_cone,
+    grasp_wrenches,
+    hold_quality,
+    hull_margin,
+    resisted_scale,
+    turned_up_directions,
+    wrench_space,
+)
 from affnerf.grasp.scoring import score_grasps
 from affnerf.grasp.target import GraspObject
 
@@ -104,3 +116,54 @@ def test_cone_edges_are_evenly_spread():
     tangential = f - f[:, 1:2] * np.array([0.0, 1.0, 0.0])
     angles = np.sort(np.arctan2(tangential[:, 2], tangential[:, 0]))
     np.testing.assert_allclose(np.diff(angles), 2 * np.pi / 8, atol=1e-12)
+
+
+def _pinch(centre: np.ndarray, axis: np.ndarray, approach: np.ndarray) -> np.ndarray:
+    """Primitive wrenches of two soft-finger contacts 2 cm apart along ``axis`` about ``centre``, centroid at 0."""
+    points = np.stack([centre - 0.01 * axis, centre + 0.01 * axis])
+    return grasp_wrenches(points, np.stack([axis, -axis]), np.zeros(3), 0.1, reference=approach)
+
+
+def test_resisted_scale_reaches_the_facet_a_direction_leaves_through():
+    cube = wrench_space(np.array(np.meshgrid(*[[-1.0, 1.0]] * 6)).reshape(6, -1).T)
+    assert resisted_scale(cube, np.array([0.0, 0.0, 0.5, 0, 0, 0])) == pytest.approx(2.0)
+    assert resisted_scale(cube, np.array([0.25, 0.0, 0.5, 0, 0, 0])) == pytest.approx(2.0)  # z still leaves first
+    # the origin on the boundary: nothing along a direction that leaves at once, up to the facet otherwise
+    half = wrench_space(np.vstack([np.eye(6), -np.eye(6)[1:]]))
+    assert resisted_scale(half, -np.eye(6)[0]) == 0.0
+    assert resisted_scale(half, np.eye(6)[0]) == pytest.approx(1.0)
+
+
+def test_a_centred_pinch_carries_mu_of_the_normal_force_in_any_turn():
+    x, z = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    wrenches = _pinch(np.zeros(3), x, np.array([0.0, 1.0, 0.0]))
+    # two fingers share a unit normal force; friction carries mu of it whichever way the weight pulls in the pads
+    assert hold_quality(wrenches, z, x) == pytest.approx(MU, rel=0.1)
+    assert hold_quality(wrenches, z, x) <= MU + 1e-9
+
+
+def test_a_pinch_far_from_the_centre_of_mass_carries_little_as_a_teapot_handle():
+    x, z = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    centred = hold_quality(_pinch(np.zeros(3), x, np.array([0.0, 1.0, 0.0])), z, x)
+    handle = hold_quality(_pinch(np.array([0.0, 0.08, 0.0]), x, np.array([0.0, 1.0, 0.0])), z, x)
+    # the weight's moment about the contacts (8 cm arm) is held only by the pads' torsion (TORSION per unit force)
+    assert handle == pytest.approx(TORSION / 0.08, rel=0.2)
+    assert handle < 0.1 * centred
+
+
+def test_turning_about_the_closing_axis_costs_a_grasp_that_holds_only_upright():
+    x, z = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    # closing vertically above the centre of mass: upright the weight presses along the closing axis into a finger
+    wrenches = _pinch(np.array([0.0, 0.0, 0.05]), z, x)
+    upright = hold_quality(wrenches, z, z, turns=(0.0,))
+    assert upright > 0.4
+    # a horizontal closing axis 5 cm above the centre: upright fine, turned by 90 degrees the weight hangs off it
+    side = _pinch(np.array([0.0, 0.0, 0.05]), x, z)
+    assert hold_quality(side, z, x, turns=(0.0,)) > 10 * hold_quality(side, z, x)
+
+
+def test_turned_up_directions_rotate_about_the_axis_and_carry_no_torque():
+    dirs = turned_up_directions(np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), (0.0, 90.0, -90.0))
+    assert np.allclose(dirs[:, 3:], 0.0)
+    assert np.allclose(dirs[0, :3], [0, 0, 1]) and np.allclose(np.abs(dirs[1:, 1]), 1.0)
+    assert np.allclose(np.linalg.norm(dirs[:, :3], axis=1), 1.0)

@@ -33,6 +33,7 @@ def plan(
     part_margin: float | None = None,
     width_clearance: float | None = None,
     min_confidence: float | None = None,
+    rank: Literal["epsilon", "hold"] | None = None,
 ) -> None:
     """Plan parallel-jaw grasps on a mesh (PLY; with --affordance, one carrying an integer `affordance` property).
 
@@ -40,8 +41,9 @@ def plan(
     (a dataset mesh), else the typical size of --category, else it is taken as metres. Antipodal candidate pairs
     are sampled on the surface (on the wanted affordance only, when given), refined all at once by a
     gradient-based local search, closed on the mesh, checked for gripper collisions and ranked by the
-    Ferrari-Canny epsilon. Writes OUT/grasps.json (metric object frame, size used; for a fitted prediction also
-    the photo's camera frame, conventions §6), OUT/grasps.glb and OUT/grasps.png. No grasp: stderr says why.
+    Ferrari-Canny epsilon (--rank hold: by the weight they carry while turned). Writes OUT/grasps.json (metric
+    object frame, size used; for a fitted prediction also the photo's camera frame, conventions §6),
+    OUT/grasps.glb and OUT/grasps.png. No grasp: stderr says why.
 
     Args:
         mesh: the mesh (a dataset's mesh.ply or a predicted affordance_model.ply).
@@ -62,6 +64,8 @@ def plan(
         min_confidence: with --affordance, on a mesh whose faces carry `confidence` (a predicted one), contacts are
             first sought on the part's faces at least this sure of their label, then on the whole part (default:
             0, off: on validation objects 0.7-0.9 cost lift-and-disturb; conventions §6).
+        rank: what orders the grasps: epsilon (Ferrari-Canny) or hold (the least weight the contacts carry at the
+            centroid while the object turns ±90° about the closing axis; canonical +z up; conventions §6).
     """
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import default_clearance, plan_into
@@ -71,7 +75,7 @@ def plan(
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance, num, candidates, seed=seed, refine=RefineConfig(steps=refine_steps))
     clearance = default_clearance(mesh) if width_clearance is None else width_clearance
-    given = {"part_margin": part_margin, "min_confidence": min_confidence}  # None: the planner's default
+    given = {"part_margin": part_margin, "min_confidence": min_confidence, "rank": rank}  # None: the default
     config = replace(config, width_clearance=clearance, **{k: v for k, v in given.items() if v is not None})
     gripper = ParallelJawGripper(max_opening=max_opening)
     report_planned(plan_into(out, canonical, mesh, config, gripper, object_size, category), out)

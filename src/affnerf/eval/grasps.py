@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -29,6 +29,7 @@ from affnerf.grasp.planner import (
     MIN_CONFIDENCE,
     PART_MARGIN,
     PREDICTED_CLEARANCE,
+    RANK,
     Grasp,
     PlanConfig,
     plan_grasps,
@@ -88,6 +89,8 @@ class GraspEvalConfig:
             prediction confirms); then on the whole part (:class:`~affnerf.grasp.planner.PlanConfig`; 0 = off, the
             default: on validation objects 0.7-0.9 raised the on-part share by 0-2 points and cost lift-and-disturb
             8-13 points, benchmarks/results/grasp_confidence.md).
+        rank: what orders every condition's grasps (:class:`~affnerf.grasp.planner.PlanConfig`): ``epsilon``
+            (Ferrari-Canny) or ``hold`` (the weight carried while the object turns about the closing axis).
     """
 
     run: Path
@@ -112,6 +115,7 @@ class GraspEvalConfig:
     agreement_distance: float = AGREEMENT_DISTANCE
     predicted_clearance: float = PREDICTED_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
+    rank: Literal["epsilon", "hold"] = RANK
 
 
 def predicted_object(
@@ -232,7 +236,11 @@ def evaluate_object(
     )
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(
-        num=config.num, seed=config.seed, part_margin=config.part_margin, min_confidence=config.min_confidence
+        num=config.num,
+        seed=config.seed,
+        part_margin=config.part_margin,
+        min_confidence=config.min_confidence,
+        rank=config.rank,
     )
     plan = replace(plan, refine=replace(plan.refine, steps=config.refine_steps))
     result: dict[str, Any] = {

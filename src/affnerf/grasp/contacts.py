@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from affnerf.grasp.gripper import ParallelJawGripper
-from affnerf.grasp.quality import MU, ferrari_canny
+from affnerf.grasp.quality import MU, ferrari_canny, grasp_wrenches, hold_quality
 from affnerf.grasp.target import GraspObject
 
 
@@ -92,4 +92,22 @@ def score_contacts(obj: GraspObject, contacts: Contacts, poses: np.ndarray, mu: 
     for g in np.flatnonzero(contacts.valid):
         inward = -obj.face_normals[contacts.faces[g]]
         out[g] = ferrari_canny(contacts.points[g], inward, obj.centroid, obj.radius, mu, reference=poses[g, :3, 2])
+    return out
+
+
+#: The object frame's vertical: canonical +z is up (conventions §1), and the physics test lifts along it.
+UP = np.array([0.0, 0.0, 1.0])
+
+
+def hold_contacts(
+    obj: GraspObject, contacts: Contacts, poses: np.ndarray, mu: float = MU, up: np.ndarray = UP
+) -> np.ndarray:
+    """(G,) :func:`~affnerf.grasp.quality.hold_quality` of closed-jaw contacts: the least weight, in units of the
+    total normal force, they carry at the object's centroid while it turns about the closing axis (0 where the jaws
+    find no valid pair)."""
+    out = np.zeros(len(contacts.valid))
+    for g in np.flatnonzero(contacts.valid):
+        inward = -obj.face_normals[contacts.faces[g]]
+        wrenches = grasp_wrenches(contacts.points[g], inward, obj.centroid, obj.radius, mu, reference=poses[g, :3, 2])
+        out[g] = hold_quality(wrenches, up, poses[g, :3, 0])
     return out

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from affnerf.errors import AffnerfError
-from affnerf.grasp.contacts import close_jaws, score_contacts
+from affnerf.grasp.contacts import close_jaws, hold_contacts, score_contacts
 from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
 from affnerf.grasp.quality import MU
 from affnerf.grasp.refine import RefineConfig, refine_grasps
@@ -35,6 +36,8 @@ WIDTH_CLEARANCE = 0.0
 #: ``width_clearance`` on a mesh predicted from one image, whose widths are uncertain (chosen on validation
 #: objects: benchmarks/results/grasp_clearance.md).
 PREDICTED_CLEARANCE = 0.012
+#: Default ``rank`` of the planner's grasps.
+RANK = "epsilon"
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,9 @@ class PlanConfig:
         min_confidence: with ``affordance``, on a mesh whose faces say how sure its predicting field is of their
             labels (``GraspObject.face_confidence``), contacts are first sought on the faces of the part at least
             this sure (and confirmed, where the mesh has a second prediction); then on the whole part. 0 = off.
+        rank: what orders the grasps, best first: ``epsilon`` (Ferrari-Canny, every wrench direction at once) or
+            ``hold`` (the least weight the contacts carry at the centroid while the object turns ±90° about the
+            closing axis, :func:`~affnerf.grasp.quality.hold_quality`; canonical +z up), ties broken by epsilon.
     """
 
     affordance: str = "none"
@@ -78,6 +84,7 @@ class PlanConfig:
     part_margin: float = PART_MARGIN
     width_clearance: float = WIDTH_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
+    rank: Literal["epsilon", "hold"] = RANK
 
 
 @dataclass
@@ -90,6 +97,8 @@ class Grasp:
         contacts: (2, 3) contact points of finger 1 and finger 2.
         epsilon: Ferrari-Canny quality.
         affordance: affordance names at the two contacts.
+        hold: the least weight the contacts carry while the object turns about the closing axis, in units of the
+            total normal force (:func:`~affnerf.grasp.quality.hold_quality`).
     """
 
     pose: np.ndarray
@@ -97,6 +106,7 @@ class Grasp:
     contacts: np.ndarray
     epsilon: float
     affordance: list[str]
+    hold: float = 0.0
 
     def to_json(self) -> dict:
         return {
@@ -105,6 +115,7 @@ class Grasp:
             "contacts": np.round(self.contacts, 6).tolist(),
             "epsilon": float(self.epsilon),
             "affordance": list(self.affordance),
+            "hold": round(float(self.hold), 6),
         }
 
 
@@ -310,9 +321,12 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
+    contacts.valid &= valid
     epsilon = score_contacts(obj, contacts, poses, config.mu)
+    hold = hold_contacts(obj, contacts, poses, config.mu)
     candidates = np.flatnonzero(valid)
-    order = candidates[np.argsort(-epsilon[candidates], kind="stable")]
+    keys = (-epsilon[candidates],) if config.rank == "epsilon" else (-epsilon[candidates], -hold[candidates])
+    order = candidates[np.lexsort(keys)]
     kept = _suppress(poses, order)[: config.num]
     return [
         Grasp(
@@ -321,6 +335,7 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
             contacts.points[i],
             float(epsilon[i]),
             obj.label_names(contacts.faces[i]),
+            float(hold[i]),
         )
         for i in kept
     ]
