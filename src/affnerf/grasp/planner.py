@@ -10,7 +10,7 @@ Use::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -321,9 +321,9 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
-    contacts.valid &= valid
-    epsilon = score_contacts(obj, contacts, poses, config.mu)
-    hold = hold_contacts(obj, contacts, poses, config.mu)
+    kept_contacts = replace(contacts, valid=valid)  # score only the grasps that passed every check
+    epsilon = score_contacts(obj, kept_contacts, poses, config.mu)
+    hold = hold_contacts(obj, kept_contacts, poses, config.mu)
     candidates = np.flatnonzero(valid)
     keys = (-epsilon[candidates],) if config.rank == "epsilon" else (-epsilon[candidates], -hold[candidates])
     order = candidates[np.lexsort(keys)]
