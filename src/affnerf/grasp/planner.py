@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from affnerf.errors import AffnerfError
-from affnerf.grasp.contacts import close_jaws, hold_contacts, score_contacts
+from affnerf.grasp.contacts import Contacts, close_jaws, hold_contacts, score_contacts
 from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
 from affnerf.grasp.quality import MU
 from affnerf.grasp.refine import RefineConfig, refine_grasps
@@ -321,13 +321,7 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
-    kept_contacts = replace(contacts, valid=valid)  # score only the grasps that passed every check
-    epsilon = score_contacts(obj, kept_contacts, poses, config.mu)
-    hold = hold_contacts(obj, kept_contacts, poses, config.mu)
-    candidates = np.flatnonzero(valid)
-    keys = (-epsilon[candidates],) if config.rank == "epsilon" else (-epsilon[candidates], -hold[candidates])
-    order = candidates[np.lexsort(keys)]
-    kept = _suppress(poses, order)[: config.num]
+    kept, epsilon, hold = _rank(obj, replace(contacts, valid=valid), poses, config)
     return [
         Grasp(
             poses[i],
@@ -339,3 +333,22 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
         )
         for i in kept
     ]
+
+
+def _rank(
+    obj: GraspObject, contacts: Contacts, poses: np.ndarray, config: PlanConfig
+) -> tuple[list[int], np.ndarray, np.ndarray]:
+    """The grasps kept, best first by ``config.rank`` with near-duplicates suppressed (at most ``config.num``
+    indices of the ``contacts.valid`` ones), and every grasp's epsilon and hold (G,) (0 where not scored: the hold
+    is computed for every valid grasp only when it ranks them, else for the kept ones alone)."""
+    epsilon = score_contacts(obj, contacts, poses, config.mu)
+    by_hold = config.rank == "hold"
+    hold = hold_contacts(obj, contacts, poses, config.mu) if by_hold else np.zeros(len(poses))
+    candidates = np.flatnonzero(contacts.valid)
+    keys = (-epsilon[candidates], -hold[candidates]) if by_hold else (-epsilon[candidates],)
+    kept = _suppress(poses, candidates[np.lexsort(keys)])[: config.num]
+    if not by_hold:
+        only = np.zeros_like(contacts.valid)
+        only[kept] = True
+        hold = hold_contacts(obj, replace(contacts, valid=only), poses, config.mu)
+    return kept, epsilon, hold
