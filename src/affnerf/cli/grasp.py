@@ -64,8 +64,7 @@ def plan(
         min_confidence: with --affordance, on a mesh whose faces carry `confidence` (a predicted one), contacts are
             first sought on the part's faces at least this sure of their label, then on the whole part (default:
             0, off: on validation objects 0.7-0.9 cost lift-and-disturb; conventions §6).
-        rank: what orders the grasps: epsilon (Ferrari-Canny) or hold (the least weight the contacts carry at the
-            centroid while the object turns ±90° about the closing axis; canonical +z up; conventions §6).
+        rank: order by epsilon (Ferrari-Canny) or hold (weight carried through ±90° turns; conventions §6).
     """
     from affnerf.grasp.gripper import ParallelJawGripper
     from affnerf.grasp.io import default_clearance, plan_into
@@ -74,9 +73,9 @@ def plan(
 
     canonical = load_grasp_object(mesh, need_affordance=affordance != "none")
     config = PlanConfig(affordance, num, candidates, seed=seed, refine=RefineConfig(steps=refine_steps))
-    clearance = default_clearance(mesh) if width_clearance is None else width_clearance
     given = {"part_margin": part_margin, "min_confidence": min_confidence, "rank": rank}  # None: the default
-    config = replace(config, width_clearance=clearance, **{k: v for k, v in given.items() if v is not None})
+    given["width_clearance"] = default_clearance(mesh) if width_clearance is None else width_clearance
+    config = replace(config, **{k: v for k, v in given.items() if v is not None})
     gripper = ParallelJawGripper(max_opening=max_opening)
     report_planned(plan_into(out, canonical, mesh, config, gripper, object_size, category), out)
 
