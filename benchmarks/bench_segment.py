@@ -253,20 +253,24 @@ def predictions(checkpoint: str, cases: list[tuple], tmp: Path, fit_steps: int) 
     predictor = Predictor.load(Path(shipped_model() if checkpoint == "shipped" else checkpoint), "auto")
     kinds = ("composite", "composite --box", "clean")
     scores: dict[str, dict[str, list[float]]] = {k: {"miou": [], "fscore_1cm": []} for k in kinds}
+    per_case: list[dict[str, Any]] = []
     for k, (obj, view, comp, box) in enumerate(cases):
         photo, clean = tmp / f"c{k}.png", tmp / f"r{k}.png"
         Image.fromarray(comp).save(photo)
         Image.fromarray(obj.rgb(view)).save(clean)
         others = [i for i in range(len(obj.record.frames)) if i != view]
         truth = true_samples(obj, 0)
+        per_case.append({"object": obj.record.object_id})
         for kind, path, kind_box in zip(kinds, (photo, photo, clean), (None, box, None), strict=True):
             for metric, value in score_photo(predictor, obj, path, others, fit_steps, truth, kind_box).items():
                 scores[kind][metric].append(value)
+                per_case[-1][f"{kind} {metric}"] = round(float(value), 4)
     return {
         "checkpoint": checkpoint,
         "fit_steps": fit_steps,
         "objects": len(cases),
         **{kind: {m: round(float(np.mean(v)), 4) for m, v in s.items()} for kind, s in scores.items()},
+        "per_composite": per_case,
     }
 
 

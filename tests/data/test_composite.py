@@ -82,3 +82,37 @@ def test_distractor_fragments_are_in_the_photo_but_not_in_its_mask():
         outside = {tuple(int(c) for c in px) for px in rgb[~mask]}
         with_pieces += bool(outside & colours)  # a distractor's exact colours, outside the mask
     assert with_pieces >= 3
+
+
+def test_panorama_views_are_overlapping_pieces_of_the_band_round_the_horizon():
+    panorama = np.zeros((8, 24, 3), np.uint8)
+    panorama[..., 0] = np.arange(24)  # the column index, to see where each view comes from
+    panorama[:2, :, 1] = panorama[-2:, :, 1] = 255  # the poles, which no view may show
+    views = composite.panorama_views(panorama)
+    assert [v.shape for v in views] == [(4, 8, 3)] * 4 and not any(v[..., 1].any() for v in views)
+    assert [v[0, :, 0].tolist() for v in views][::3] == [list(range(8)), [18, 19, 20, 21, 22, 23, 0, 1]]  # wraps
+
+
+def test_the_library_holds_the_real_scenes_the_viewer_ships():
+    scenes = composite.scene_photos()
+    assert len(scenes) >= 40 and all(s.dtype == np.uint8 and s.shape[2] == 3 for s in scenes)
+    assert len(composite.photo_library()) == len(composite.photo_library(scenes=False)) + len(scenes)
+
+
+def test_a_subject_lies_behind_the_object_and_is_not_in_its_mask():
+    rng = np.random.default_rng(5)
+    target = composite.cut_to_box(np.full((30, 30, 3), 250, np.uint8), np.ones((30, 30), bool))
+    with_subject = 0
+    for _ in range(20):
+        rgb, mask = composite.training_photo(rng, target, [], (64, 48), subjects=[_cutout()])
+        assert (rgb[mask] >= 125).all()
+        with_subject += bool((np.abs(rgb[~mask].astype(int) - (200, 30, 40)).max(-1) <= 1).any())
+    assert 4 <= with_subject <= 16  # about half of the photos have one
+
+
+def test_largest_component_keeps_the_biggest_region():
+    mask = np.zeros((6, 10), bool)
+    mask[0, 0] = True
+    mask[2:5, 3:8] = True
+    assert composite.largest_component(mask).sum() == 15 and not composite.largest_component(mask)[0, 0]
+    assert not composite.largest_component(np.zeros((3, 3), bool)).any()

@@ -72,3 +72,15 @@ def test_training_can_start_from_the_salient_models_weights(train_dataset, tmp_p
     trained = load_segmenter(cfg.out)
     assert record["steps_done"] == 2 and trained.config == SegmenterConfig(kind="u2netp", input_side=64)
     assert not np.array_equal(object_probability(start, photo), object_probability(trained, photo))  # it learnt
+
+
+def test_subjects_are_the_salient_things_cut_out_of_the_photos():
+    if salient_weights("onnx") is None:
+        pytest.skip(SEGMENT_EXTRA_MISSING)
+    photo = np.full((240, 320, 3), 235, np.uint8)
+    yy, xx = np.mgrid[:240, :320]
+    photo[(yy - 120) ** 2 + (xx - 160) ** 2 < 70**2] = (200, 40, 30)  # a red disk on a plain card
+    subjects = segmenter.subject_cutouts([photo], 3, np.random.default_rng(0))
+    assert 1 <= len(subjects) <= 3
+    for cut in subjects:  # each is the disk (or the part of it in a zoomed crop), not the card
+        assert cut.mask.mean() > 0.5 and (cut.rgb[cut.mask][:, 0] > cut.rgb[cut.mask][:, 1] + 80).mean() > 0.9

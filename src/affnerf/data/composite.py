@@ -4,11 +4,16 @@ A training photo is one object of a dataset (its RGB render and its mask, ``affo
 size and place onto a random background, with or without a soft drop shadow. Backgrounds are either a crop of a
 photograph that ships inside scikit-image (no download; a documented list can be held out for testing) or
 "dead leaves" clutter: overlapping random shapes of random colours, a classic stand-in for natural image
-statistics. Colour, blur and noise are changed afterwards by the trainer (:mod:`affnerf.train.segmenter`).
+statistics. When the viewer's package (viser) is installed, views of the ten real scenes it ships as environment
+maps (Poly Haven panoramas, CC0: an interior, a warehouse, a studio, streets, a park, a forest, ...) join the
+photographs. Whole things cut out of the photographs (their salient subjects) can be pasted as distractors, so
+that "the thing the photo is about" is not taken for the object. Colour, blur and noise are changed afterwards by
+the trainer (:mod:`affnerf.train.segmenter`).
 """
 
 from __future__ import annotations
 
+import importlib.util
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,6 +26,8 @@ from scipy import ndimage
 HELD_OUT_BACKGROUNDS = ("astronaut", "coffee", "chelsea", "rocket", "hubble_deep_field", "ihc")
 #: Range of the object's larger side as a share of the photo's height.
 OBJECT_SCALE = (0.2, 0.85)
+#: Share of training photos with a subject (:func:`training_photo`) and its larger side's range (share of H).
+SUBJECT_SHARE, SUBJECT_SCALE = 0.5, (0.4, 0.95)
 
 
 @dataclass
@@ -45,22 +52,69 @@ def cut_to_box(rgb: np.ndarray, mask: np.ndarray) -> Cutout | None:
     return Cutout(np.ascontiguousarray(rgb[box]), np.ascontiguousarray(mask[box]))
 
 
-def photo_library(exclude: tuple[str, ...] = HELD_OUT_BACKGROUNDS) -> list[np.ndarray]:
-    """(H, W, 3) uint8 photographs bundled with scikit-image (grey ones as three equal channels), except the
-    file stems in ``exclude``; empty when scikit-image is not installed."""
-    try:
-        import skimage.data
-    except ImportError:
+def largest_component(mask: np.ndarray) -> np.ndarray:
+    """The largest 8-connected component of an (H, W) bool mask (all False when it is empty).
+
+    Example:
+        >>> m = np.zeros((3, 6), bool); m[0, 0] = m[1, 3:6] = True
+        >>> largest_component(m).sum()
+        np.int64(3)
+    """
+    labels, count = ndimage.label(mask, structure=np.ones((3, 3)))
+    if count <= 1:
+        return mask.astype(bool)
+    sizes = ndimage.sum(mask, labels, index=np.arange(1, count + 1))
+    return labels == int(np.argmax(sizes)) + 1
+
+
+def _package_folder(name: str) -> Path | None:
+    """The installed package ``name``'s folder, without importing it (``None`` when it is not installed)."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def panorama_views(panorama: np.ndarray, views: int = 4) -> list[np.ndarray]:
+    """``views`` (H/2, W/views·4/3, 3) views around an (H, W, 3) equirectangular panorama: its band within 45° of
+    the horizon (where it is least stretched), cut into overlapping pieces of 120° (wrapping round).
+
+    Example:
+        >>> [v.shape for v in panorama_views(np.zeros((512, 1024, 3), np.uint8))]
+        [(256, 341, 3), (256, 341, 3), (256, 341, 3), (256, 341, 3)]
+    """
+    h, w = panorama.shape[:2]
+    band = np.concatenate([panorama[h // 4 : h - h // 4]] * 2, axis=1)
+    width = w // 3
+    return [np.ascontiguousarray(band[:, k * w // views : k * w // views + width]) for k in range(views)]
+
+
+def scene_photos() -> list[np.ndarray]:
+    """(H, W, 3) uint8 views of the real-scene panoramas that viser ships (:func:`panorama_views`); empty when viser
+    is not installed."""
+    folder = _package_folder("viser")
+    if folder is None:
         return []
-    folder = Path(skimage.data.__file__).parent
+    views = []
+    for path in sorted((folder / "_assets" / "hdri").glob("*.jpg")):
+        views += panorama_views(np.asarray(Image.open(path).convert("RGB")))
+    return views
+
+
+def photo_library(exclude: tuple[str, ...] = HELD_OUT_BACKGROUNDS, scenes: bool = True) -> list[np.ndarray]:
+    """(H, W, 3) uint8 photographs bundled with scikit-image (grey ones as three equal channels), except the
+    file stems in ``exclude``, and with ``scenes`` the views of :func:`scene_photos`; empty when neither package
+    is installed."""
+    folder = _package_folder("skimage")
     photos = []
-    for path in sorted(folder.glob("*.png")) + sorted(folder.glob("*.jpg")):
+    paths = sorted((folder / "data").glob("*.png")) + sorted((folder / "data").glob("*.jpg")) if folder else []
+    for path in paths:
         if path.stem.startswith(tuple(exclude)):
             continue
         image = np.asarray(Image.open(path).convert("RGB"))
         if min(image.shape[:2]) >= 64:
             photos.append(image)
-    return photos
+    return photos + (scene_photos() if scenes else [])
 
 
 def random_colour(rng: np.random.Generator) -> tuple[int, int, int]:
@@ -161,12 +215,16 @@ def training_photo(
     photos: list[np.ndarray],
     size: tuple[int, int],
     distractors: list[Cutout] = (),
+    subjects: list[Cutout] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
     """One synthetic photo of ``size`` (W, H): (H, W, 3) uint8 image and (H, W) bool true mask.
 
-    Up to two fragments (:func:`fragment`) of ``distractors`` are pasted into the background first, so that a
-    rendered look alone does not make an object: the network has to find a whole one."""
+    Half of the time one of ``subjects`` (a whole thing cut out of a photograph) is pasted large into the
+    background first, which the object may then lie on. Up to two fragments (:func:`fragment`) of ``distractors``
+    follow, so that a rendered look alone does not make an object: the network has to find a whole one."""
     background = random_background(rng, size, photos)
+    if len(subjects) and rng.random() < SUBJECT_SHARE:
+        background, _ = paste(rng, background, subjects[rng.integers(len(subjects))], scale=SUBJECT_SCALE)
     for _ in range(rng.integers(0, 3) if len(distractors) else 0):
         piece = fragment(rng, distractors[rng.integers(len(distractors))])
         if piece is not None:

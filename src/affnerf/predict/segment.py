@@ -36,6 +36,7 @@ from typing import Literal, get_args
 import numpy as np
 from scipy import ndimage
 
+from affnerf.data.composite import largest_component
 from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import SEGMENTER_THRESHOLD, load_segmenter, object_probability
 from affnerf.predict import shipped
@@ -155,21 +156,6 @@ def uniform_background_mask(rgb: np.ndarray, tolerance: float = BACKGROUND_TOLER
         keep = np.flatnonzero(sizes >= max(4, 0.002 * sizes.max())) + 1
         mask = np.isin(labels, keep)
     return mask
-
-
-def largest_component(mask: np.ndarray) -> np.ndarray:
-    """The largest 8-connected component of an (H, W) bool mask (all False when it is empty).
-
-    Example:
-        >>> m = np.zeros((3, 6), bool); m[0, 0] = m[1, 3:6] = True
-        >>> largest_component(m).sum()
-        np.int64(3)
-    """
-    labels, count = ndimage.label(mask, structure=np.ones((3, 3)))
-    if count <= 1:
-        return mask.astype(bool)
-    sizes = ndimage.sum(mask, labels, index=np.arange(1, count + 1))
-    return labels == int(np.argmax(sizes)) + 1
 
 
 def mask_iou(a: np.ndarray, b: np.ndarray) -> float:

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from affnerf.data.composite import Cutout, cut_to_box, photo_library, training_photo
+from affnerf.data.composite import Cutout, cut_to_box, largest_component, photo_crop, photo_library, training_photo
 from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import (
@@ -30,6 +30,7 @@ from affnerf.model.segmenter import (
     Segmenter,
     SegmenterConfig,
     build_segmenter,
+    object_probability,
     read_segmenter,
     save_segmenter,
 )
@@ -60,6 +61,10 @@ class SegmenterTrainConfig:
             ``affnerf[segment]``; the network's kind becomes ``u2netp``, its other fields are kept): a network that
             has seen real photographs, fine-tuned to the dataset's families. Use a small ``lr`` (1e-4) and an
             ``input_side`` that is a multiple of 32 whose three quarters are too (256).
+        subjects: how many whole things to cut out of random crops of the background photographs with the
+            salient-object model (the optional extra; none without it); half of the training photos get one pasted
+            large behind the object (:func:`affnerf.data.composite.training_photo`), so that the subject of a busy
+            photo (a person, a cup) is not taken for the object. 0 = none.
         precision: ``bf16`` runs each step's forward pass under bfloat16 autocast (weights and Adam state stay
             float32), about twice as fast for U²-Net-p on a CPU with bfloat16 instructions; ``fp32`` as before.
         network: the network's shape.
@@ -78,6 +83,7 @@ class SegmenterTrainConfig:
     time_limit_min: float = 0.0
     init: Path | None = None
     init_salient: bool = False
+    subjects: int = 0
     precision: Precision = "fp32"
     network: SegmenterConfig = SegmenterConfig()
 
@@ -96,14 +102,43 @@ def load_cutouts(dataset: Dataset, split: str, views: int, rng: np.random.Genera
     return cutouts
 
 
+def subject_cutouts(photos: list[np.ndarray], count: int, rng: np.random.Generator) -> list[Cutout]:
+    """Up to ``count`` whole things cut out of random 4:3 crops of ``photos`` (zoomed 1-2.5×): the largest region
+    the salient-object model marks (p > 0.5) in each, kept when it covers 3-60 % of the crop. Empty (with a
+    warning) when the model is not installed."""
+    from affnerf.model.u2netp import SalientUnavailable, check_weights, load_onnx_weights, weights_path
+
+    try:
+        path = weights_path()
+        model = build_segmenter(SegmenterConfig(kind="u2netp", input_side=320))
+        load_onnx_weights(model.net, check_weights(path), path)
+    except SalientUnavailable as err:
+        logger.warning("no subjects pasted: %s", err)
+        return []
+    cutouts = []
+    for _ in range(4 * count):
+        if len(cutouts) == count or not photos:
+            break
+        crop = photo_crop(rng, photos[rng.integers(len(photos))], (320, 240))
+        mask = largest_component(object_probability(model.eval(), crop) > 0.5)
+        if 0.03 <= mask.mean() <= 0.6:
+            cutouts.append(cut_to_box(crop, mask))
+    return cutouts
+
+
 def make_pool(
-    cutouts: list[Cutout], photos: list[np.ndarray], count: int, size: tuple[int, int], rng: np.random.Generator
+    cutouts: list[Cutout],
+    photos: list[np.ndarray],
+    count: int,
+    size: tuple[int, int],
+    rng: np.random.Generator,
+    subjects: list[Cutout] = (),
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """(count, 3, H, W) uint8 synthetic photos and (count, 1, H, W) bool masks at ``size`` = (W, H)."""
     images = torch.empty(count, 3, size[1], size[0], dtype=torch.uint8)
     masks = torch.empty(count, 1, size[1], size[0], dtype=torch.bool)
     for k in range(count):
-        rgb, mask = training_photo(rng, cutouts[rng.integers(len(cutouts))], photos, size, cutouts)
+        rgb, mask = training_photo(rng, cutouts[rng.integers(len(cutouts))], photos, size, cutouts, subjects)
         images[k] = torch.from_numpy(rgb).permute(2, 0, 1)
         masks[k, 0] = torch.from_numpy(mask)
     return images, masks
@@ -199,8 +234,10 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
     model = initial_segmenter(cfg)
     dataset, size, photos = Dataset.open(cfg.data), network_size(model.config), photo_library()
     start = time.perf_counter()
-    train = make_pool(load_cutouts(dataset, "train", cfg.views_per_object, rng), photos, cfg.pool, size, rng)
-    val = make_pool(load_cutouts(dataset, "val", 2, rng), photos, cfg.val_photos, size, rng)
+    subjects = subject_cutouts(photos, cfg.subjects, rng) if cfg.subjects else []
+    cutouts = load_cutouts(dataset, "train", cfg.views_per_object, rng)
+    train = make_pool(cutouts, photos, cfg.pool, size, rng, subjects)
+    val = make_pool(load_cutouts(dataset, "val", 2, rng), photos, cfg.val_photos, size, rng, subjects)
     logger.info("pool of %d photos (+%d validation) in %.0f s", cfg.pool, cfg.val_photos, time.perf_counter() - start)
     model.train()
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=1e-4)
@@ -228,6 +265,7 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
             save_segmenter(model.eval(), Path(cfg.out), partial)
             model.train()
     record = {"config": {k: str(v) for k, v in asdict(cfg).items()}, "steps_done": step, "curve": curve,
-              "minutes": round((time.perf_counter() - start) / 60, 2), "backgrounds": len(photos)}  # fmt: skip
+              "minutes": round((time.perf_counter() - start) / 60, 2), "backgrounds": len(photos),
+              "subjects": len(subjects)}  # fmt: skip
     save_segmenter(model.eval(), Path(cfg.out), record)
     return record
