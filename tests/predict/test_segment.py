@@ -233,10 +233,20 @@ def _two_objects():
 @needs_opencv
 def test_a_box_confines_auto_to_grabcut_from_the_rectangle():
     rgb, truth = _two_objects()
-    seg = segment.segment(rgb, "auto", box=(50, 40, 235, 200))
+    seg = segment.segment(rgb, "auto", box=(50, 40, 235, 200), segmenter=segment.NO_SEGMENTER)
     assert seg.source == "grabcut" and seg.box == (50, 40, 235, 200)
     assert segment.mask_iou(seg.mask, truth) > 0.8
     assert not seg.mask[:40].any() and not seg.mask[:, :50].any()  # nothing outside the box, the distractor left
+
+
+def test_in_a_box_auto_takes_the_segmenters_mask_only_when_it_is_sure(monkeypatch):
+    rgb, truth = _two_objects()
+    box = (50, 40, 235, 200)
+    seg = segment.segment(rgb, "auto", box=box)  # the shipped segmenter, seeing the whole photo
+    assert seg.source == "segmenter" and seg.confidence >= segment.BOX_SEGMENTER_CONFIDENCE and seg.box == box
+    assert segment.mask_iou(seg.mask, truth) > 0.8 and not seg.mask[:40].any() and not seg.mask[:, :50].any()
+    monkeypatch.setattr(segment, "BOX_SEGMENTER_CONFIDENCE", 1.01)  # never sure enough: GrabCut in the box
+    assert segment.segment(rgb, "auto", box=box).source == "grabcut"
 
 
 def test_a_box_runs_any_method_inside_it_and_is_clipped_to_the_image():
@@ -277,5 +287,8 @@ def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_s
     tight = (int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1)  # a detector's box, no margin
     seg = segment.segment(rgb, "auto", box=tight)
     assert segment.mask_iou(seg.mask, truth) > 0.8 and seg.mask.sum() > 0.9 * truth.sum()
-    whole = segment.segment(*_composite()[:1], "auto", box=(0, 0, 320, 240))  # the box is the whole image
-    assert whole.source == "grabcut" and segment.mask_iou(whole.mask, _composite()[1]) > 0.8
+    whole_image = (0, 0, 320, 240)
+    for segmenter in (None, segment.NO_SEGMENTER):  # the shipped segmenter's mask, or GrabCut from the whole image
+        whole = segment.segment(_composite()[0], "auto", box=whole_image, segmenter=segmenter)
+        assert whole.source == ("grabcut" if segmenter else "segmenter")
+        assert segment.mask_iou(whole.mask, _composite()[1]) > 0.8
