@@ -14,14 +14,15 @@ def train_segmenter(config: Annotated[SegmenterTrainConfig, tyro.conf.arg(name="
     """Train the object segmenter on a dataset's training objects pasted onto clutter.
 
     The objects of DATA's train split (a few views each) are pasted onto photographs bundled with scikit-image
-    (except those the composite benchmark holds out), with fragments of other objects and random-shape clutter,
-    and a network learns their masks: with --init-salient, the salient-object model's U²-Net-p fine-tuned (what
-    pays; use --lr 1e-4 --precision bf16 --network.input-side 256), else a small U-Net from random weights. Use it
-    for photos of your own object families: `affnerf predict --segmenter OUT` (with --segment auto or segmenter).
-    Writes OUT (weights, network shape and the training record with the validation mask IoU, also after every 250
-    steps). On the procedural families, 94 minutes of 2 CPU cores fine-tuning U²-Net-p gave the segmenter that
-    ships (mean mask IoU 0.75 on unseen photographs, against 0.54 for GrabCut; a U-Net from random weights, 80
-    minutes: 0.37; benchmarks/results/segmenter_u2netp.md): check yours on your photos before relying on it.
+    (except those the composite benchmark holds out) and views of the real scenes viser ships, with fragments of
+    other objects, random-shape clutter and (--subjects N) whole things cut out of the photographs, and a network
+    learns their masks: with --init-salient, the salient-object model's U²-Net-p fine-tuned (what pays; use --lr
+    1e-4 --precision bf16 --network.input-side 256), else a small U-Net from random weights. Use it for photos of
+    your own object families: `affnerf predict --segmenter OUT` (with --segment auto or segmenter). Writes OUT
+    (weights, network shape and the training record with the validation mask IoU, also after every 250 steps). On
+    the procedural families, 154 minutes of 2 CPU cores fine-tuning U²-Net-p in three stages gave the segmenter
+    that ships (mean mask IoU 0.79 on unseen photographs, against 0.54 for GrabCut; a U-Net from random weights,
+    80 minutes: 0.37; benchmarks/results/segmenter_u2netp.md): check yours on your photos before relying on it.
 
     Exit codes: 0 done; 2 bad input (no dataset at DATA, no objects in its train split).
     """

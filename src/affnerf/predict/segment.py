@@ -265,8 +265,8 @@ def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None) -> Se
     """The object segmenter's mask (probability above :data:`~affnerf.model.segmenter.SEGMENTER_THRESHOLD`, largest
     component; inside ``box`` only when one is given, the network still seeing the whole photo) and its
     confidence, the mean probability over the mask (0 when the mask is empty). GrabCut's edges are not drawn on
-    it: with the shipped segmenter they moved the composite benchmark's mean mask IoU by +0.012 (0.748 → 0.760) for
-    0.1 s an image, within the noise of one benchmark run."""
+    it: they moved the composite benchmark's mean mask IoU by +0.012 with the segmenter's second stage (0.748 →
+    0.760) and +0.006 with its third (0.794 → 0.800), for 0.1 s an image, within the noise of one benchmark run."""
     prob = object_probability(model, rgb)
     found = prob > SEGMENTER_THRESHOLD
     if box is not None:
