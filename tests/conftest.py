@@ -130,7 +130,7 @@ def trained_segmenter(train_dataset, tmp_path_factory) -> Path:
 
     out = tmp_path_factory.mktemp("segmenter") / "segmenter.pt"
     cfg = SegmenterTrainConfig(
-        data=train_dataset, out=out, steps=120, batch=8, lr=5e-3, views_per_object=8, pool=96, val_photos=16,
+        data=train_dataset, out=out, steps=200, batch=8, lr=5e-3, views_per_object=8, pool=96, val_photos=16,
         network=SegmenterConfig(base=8, levels=2, input_side=48),
     )  # fmt: skip
     train_segmenter(cfg)  # seeded by cfg.seed
