@@ -225,15 +225,17 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
     return out
 
 
-def score_photo(predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int, truth, box=None) -> dict:
-    """The prediction from ``photo`` (separated inside ``box`` when given; fitted to it for ``fit_steps`` first, as
-    ``affnerf predict`` does; 0 = the encoders' codes): its affordance mIoU at the object's ``targets`` views and its
-    F@1cm against ``truth`` (the object's :func:`affnerf.eval.surface.true_samples`)."""
+def score_photo(
+    predictor, obj: ObjectData, photo: Path, targets: list[int], fit_steps: int, truth, box=None, mask=None
+) -> dict:
+    """The prediction from ``photo`` (separated by the ``mask`` file, or inside ``box``, when given; fitted to it for
+    ``fit_steps`` first, as ``affnerf predict`` does; 0 = the encoders' codes): its affordance mIoU at the object's
+    ``targets`` views and its F@1cm against ``truth`` (the object's :func:`affnerf.eval.surface.true_samples`)."""
     from affnerf.eval.surface import sample_seed, score_mesh
     from affnerf.metrics.segmentation import confusion_matrix, mean_iou
     from affnerf.predict.invert import InversionConfig
 
-    enc = predictor.encode_image(photo, box=box)
+    enc = predictor.encode_image(photo, mask=mask, box=box)
     if fit_steps > 0:
         predictor.fit(enc, InversionConfig(steps=fit_steps))
     n = len(predictor.classes)

@@ -1,0 +1,71 @@
+"""How much of the loss from a cluttered photo is the mask (issue 16): predictions from the composites of
+``bench_segment.py`` (the same seeded draws) given their *true* mask, from the object at the same size and place on a
+white background, and from the clean render, each scored like ``bench_segment.py --checkpoint`` does (the shipped
+model fitted to the photo for 30 steps; affordance mIoU at the object's other views, F@1cm of the mesh).
+
+Run::
+
+    .venv/bin/python benchmarks/segment_true_mask.py --data /tmp/seg/data \
+        --out benchmarks/results/segment_true_mask.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from affnerf.data.dataset import Dataset
+from affnerf.eval.surface import true_samples
+from affnerf.predict.predictor import Predictor
+from affnerf.predict.shipped import shipped_model
+
+sys.path.insert(0, str(Path(__file__).parent))
+from bench_segment import BACKGROUNDS, backgrounds, composite, score_photo  # noqa: E402
+
+KINDS = ("composite, true mask", "white background, same size", "clean render")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
+    parser.add_argument("--composites", type=int, default=24)
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)  # bench_segment.py --seed 0's draws, in its order
+    ds = Dataset.open(args.data)
+    entries = ds.objects()
+    picks = rng.permutation(len(entries))[:48]
+    bgs, tmp = backgrounds(), Path(tempfile.mkdtemp())
+    predictor = Predictor.load(Path(shipped_model()), "auto")
+    rows = []
+    for k, idx in enumerate(picks[: args.composites]):
+        obj = ds.load_object(entries[idx])
+        view = int(rng.integers(len(obj.record.frames)))
+        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
+        same_draws = copy.deepcopy(rng)  # the white version: the same size and place
+        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
+        white, _ = composite(obj.rgb(view), obj.affordance(view) > 0, np.full_like(bgs[bg], 255), False, same_draws)
+        for name, image in (("c.png", rgb), ("m.png", truth.astype(np.uint8) * 255), ("w.png", white)):
+            Image.fromarray(image).save(tmp / name)
+        Image.fromarray(obj.rgb(view)).save(tmp / "r.png")
+        others, truth_3d = [i for i in range(len(obj.record.frames)) if i != view], true_samples(obj, 0)
+        row = {"object": obj.record.object_id, "background": bg}
+        for kind, photo, mask in zip(KINDS, ("c.png", "w.png", "r.png"), (tmp / "m.png", None, None), strict=True):
+            scores = score_photo(predictor, obj, tmp / photo, others, 30, truth_3d, mask=mask)
+            row[kind] = {m: round(float(v), 4) for m, v in scores.items()}
+        rows.append(row)
+        print(k, row, flush=True)
+    summary = {n: {m: round(float(np.mean([r[n][m] for r in rows])), 4) for m in ("miou", "fscore_1cm")} for n in KINDS}
+    print(json.dumps(summary))
+    args.out.write_text(json.dumps({"summary": summary, "rows": rows}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
