@@ -25,9 +25,12 @@ affordance mIoU at the object's other dataset views and the 3D F-score at 1 cm o
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import tempfile
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -99,6 +102,52 @@ def padded_box(
         min(w, int(cols[-1] + 1 + right * bw)),
         min(h, int(rows[-1] + 1 + bottom * bh)),
     )
+
+
+@dataclass
+class BenchComposite:
+    """One composite of the benchmark, as :func:`bench_composites` draws it.
+
+    Attributes:
+        index: its place in the draw order (``k``).
+        obj, view: the object and the dataset view pasted.
+        background, shadow: the photograph's name (:data:`BACKGROUNDS`) and whether a drop shadow was cast.
+        rgb: (H, W, 3) uint8 composite; truth: (H, W) bool true mask.
+        box, tight_box: the true bounding box loosened by :data:`BOX_PADDING` and :data:`TIGHT_PADDING` per side.
+        draws: the random generator as it was before this composite was pasted: :func:`composite` with a copy of it
+            pastes the object at the same size and place onto another background.
+    """
+
+    index: int
+    obj: ObjectData
+    view: int
+    background: str
+    shadow: bool
+    rgb: np.ndarray
+    truth: np.ndarray
+    box: tuple[int, int, int, int]
+    tight_box: tuple[int, int, int, int]
+    draws: np.random.Generator
+
+
+def bench_composites(data: Path, seed: int, count: int) -> Iterator[BenchComposite]:
+    """The benchmark's first ``count`` composites for ``seed``, in order: every script that replays them (the
+    examples, the box rule, the true-mask check) gets the same objects, views, placements and boxes."""
+    rng = np.random.default_rng(seed)
+    ds = Dataset.open(data)
+    entries = ds.objects()
+    picks = rng.permutation(len(entries))[:count]
+    bgs = backgrounds()
+    box_rng = np.random.default_rng(seed + 1)  # its own stream: the composites stay those of earlier runs
+    tight_rng = np.random.default_rng(seed + 2)
+    for k, idx in enumerate(picks):
+        obj = ds.load_object(entries[idx])
+        view = int(rng.integers(len(obj.record.frames)))
+        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
+        draws = copy.deepcopy(rng)
+        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
+        box, tight = padded_box(truth, box_rng), padded_box(truth, tight_rng, TIGHT_PADDING)
+        yield BenchComposite(k, obj, view, bg, shadow, rgb, truth, box, tight, draws)
 
 
 def measure_box(rgb: np.ndarray, truth: np.ndarray, boxes: dict[str, tuple[int, int, int, int]]) -> tuple[dict, dict]:
@@ -313,33 +362,22 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
 def main() -> None:
     args = parse_args()
     args.segmenter = args.segmenter or segment.resolve_segmenter(None)
-    rng = np.random.default_rng(args.seed)
-    ds = Dataset.open(args.data)
-    entries = ds.objects()
-    picks = rng.permutation(len(entries))[: args.composites]
-    bgs = backgrounds()
     model = salient.load_salient_model()
     model.saliency(np.zeros((32, 32, 3), np.uint8))  # warm-up: the first run pays one-off allocations
     segmenter = segnet.load_segmenter(args.segmenter)
     segnet.object_probability(segmenter, np.zeros((32, 32, 3), np.uint8))
     rows, cases = [], []
-    box_rng = np.random.default_rng(args.seed + 1)  # its own stream: the composites stay those of earlier runs
-    tight_rng = np.random.default_rng(args.seed + 2)
-    for k, idx in enumerate(picks):
-        obj = ds.load_object(entries[idx])
-        view = int(rng.integers(len(obj.record.frames)))
-        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
-        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
+    for c in bench_composites(args.data, args.seed, args.composites):
+        obj, rgb, truth, box, k, bg, shadow = c.obj, c.rgb, c.truth, c.box, c.index, c.background, c.shadow
         iou, secs, extra = measure_one(rgb, truth, model, args.segmenter)
-        box = padded_box(truth, box_rng)
-        boxes = {"": box, " (tight)": padded_box(truth, tight_rng, TIGHT_PADDING)}
+        boxes = {"": box, " (tight)": c.tight_box}
         boxed = measure_box(rgb, truth, boxes)
         iou, secs = {**iou, **boxed[0]}, {**secs, **boxed[1]}
         more = measure_segmenter(rgb, truth, segmenter, args.segmenter, boxes)
         iou, secs, extra = {**iou, **more[0]}, {**secs, **more[1]}, {**extra, **more[2]}
         rows.append({"object": obj.record.object_id, "category": obj.record.category, "background": bg,
                      "shadow": shadow, "box": box, "iou": iou, "secs": secs, **extra})  # fmt: skip
-        cases.append((obj, view, rgb, box))
+        cases.append((obj, c.view, rgb, box))
         print(f"{k:3d} {obj.record.object_id:16s} {bg:22s} shadow={shadow!s:5s} "
               + " ".join(f"{m}={v:.3f}" for m, v in iou.items()))  # fmt: skip
     result = {

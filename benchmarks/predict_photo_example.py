@@ -30,13 +30,12 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from affnerf.data.dataset import Dataset
 from affnerf.pictures.compose import fit_height, legend, stack_rows, text_strip
 from affnerf.predict.segment import mask_iou
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import BACKGROUNDS, backgrounds, composite, padded_box  # noqa: E402
+from bench_segment import bench_composites  # noqa: E402
 
 #: Height in pixels of each panel of the picture.
 PANEL_HEIGHT = 200
@@ -44,24 +43,11 @@ PANEL_HEIGHT = 200
 Case = tuple[str, str, np.ndarray, np.ndarray, tuple[int, int, int, int]]
 
 
-def bench_composites(data: Path, wanted: list[int], seed: int = 0) -> dict[int, Case]:
+def example_cases(data: Path, wanted: list[int], seed: int = 0) -> dict[int, Case]:
     """{k: (object id, background, rgb, true mask, box)} of composites ``wanted`` of ``bench_segment.py --seed
-    seed``, by replaying its random draws in its order."""
-    rng, box_rng = np.random.default_rng(seed), np.random.default_rng(seed + 1)
-    ds = Dataset.open(data)
-    entries = ds.objects()
-    picks = rng.permutation(len(entries))
-    bgs = backgrounds()
-    out = {}
-    for k in range(max(wanted) + 1):
-        obj = ds.load_object(entries[picks[k]])
-        view = int(rng.integers(len(obj.record.frames)))
-        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
-        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        box = padded_box(truth, box_rng)
-        if k in wanted:
-            out[k] = (obj.record.object_id, bg, rgb, truth, box)
-    return out
+    seed`` (:func:`bench_segment.bench_composites`)."""
+    return {c.index: (c.obj.record.object_id, c.background, c.rgb, c.truth, c.box)
+            for c in bench_composites(data, seed, max(wanted) + 1) if c.index in wanted}  # fmt: skip
 
 
 def with_box(photo: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
@@ -102,7 +88,7 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, default=None, help="keep each photo.png and predict's folder here")
     parser.add_argument("--picture", type=Path, default=Path(__file__).parents[1] / "docs" / "predict_photo.png")
     args = parser.parse_args()
-    cases = bench_composites(args.data, args.rows + args.boxed, args.seed)
+    cases = example_cases(args.data, args.rows + args.boxed, args.seed)
     rows, ids = [], set()
     with tempfile.TemporaryDirectory() as tmp:
         for k, boxed in [(k, False) for k in args.rows] + [(k, True) for k in args.boxed]:

@@ -22,12 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.data.dataset import Dataset
 from affnerf.model import segmenter as segnet
 from affnerf.predict import segment
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import BACKGROUNDS, TIGHT_PADDING, backgrounds, composite, padded_box  # noqa: E402
+from bench_segment import bench_composites  # noqa: E402
 
 THRESHOLDS = (0.8, 0.85, 0.9, 0.93, 0.95)
 
@@ -39,27 +38,17 @@ def main() -> None:
     parser.add_argument("--composites", type=int, default=48)
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
-    rng = np.random.default_rng(args.seed)  # the draws of bench_segment.py, in its order
-    ds = Dataset.open(args.data)
-    entries = ds.objects()
-    picks = rng.permutation(len(entries))[: args.composites]
-    bgs, model = backgrounds(), segnet.load_segmenter(segment.resolve_segmenter(None))
-    box_rngs = {"loose": np.random.default_rng(args.seed + 1), "tight": np.random.default_rng(args.seed + 2)}
+    model = segnet.load_segmenter(segment.resolve_segmenter(None))
     rows = []
-    for k, idx in enumerate(picks):
-        obj = ds.load_object(entries[idx])
-        view = int(rng.integers(len(obj.record.frames)))
-        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
-        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        for kind, box_rng in box_rngs.items():
-            box = padded_box(truth, box_rng, TIGHT_PADDING) if kind == "tight" else padded_box(truth, box_rng)
-            seg = segment.segmenter_segmentation(rgb, model, box)
-            grabcut = segment.segment_in_box(rgb, box, segmenter=segment.NO_SEGMENTER)
-            rows.append({"object": obj.record.object_id, "background": bg, "box": kind, "confidence": seg.confidence,
-                         "segmenter": segment.mask_iou(seg.mask, truth),
-                         "grabcut": segment.mask_iou(grabcut.mask, truth)})  # fmt: skip
+    for c in bench_composites(args.data, args.seed, args.composites):
+        for kind, box in (("loose", c.box), ("tight", c.tight_box)):
+            seg = segment.segmenter_segmentation(c.rgb, model, box)
+            grabcut = segment.segment_in_box(c.rgb, box, segmenter=segment.NO_SEGMENTER)
+            rows.append({"object": c.obj.record.object_id, "background": c.background, "box": kind,
+                         "confidence": seg.confidence, "segmenter": segment.mask_iou(seg.mask, c.truth),
+                         "grabcut": segment.mask_iou(grabcut.mask, c.truth)})  # fmt: skip
     summary = {}
-    for kind in box_rngs:
+    for kind in ("loose", "tight"):
         r = [x for x in rows if x["box"] == kind]
         summary[kind] = {
             "segmenter": np.mean([x["segmenter"] for x in r]),

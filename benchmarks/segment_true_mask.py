@@ -12,7 +12,6 @@ Run::
 from __future__ import annotations
 
 import argparse
-import copy
 import json
 import sys
 import tempfile
@@ -21,13 +20,12 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from affnerf.data.dataset import Dataset
 from affnerf.eval.surface import true_samples
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import BACKGROUNDS, backgrounds, composite, score_photo  # noqa: E402
+from bench_segment import backgrounds, bench_composites, composite, score_photo  # noqa: E402
 
 KINDS = ("composite, true mask", "white background, same size", "clean render")
 
@@ -38,30 +36,23 @@ def main() -> None:
     parser.add_argument("--composites", type=int, default=24)
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
-    rng = np.random.default_rng(0)  # bench_segment.py --seed 0's draws, in its order
-    ds = Dataset.open(args.data)
-    entries = ds.objects()
-    picks = rng.permutation(len(entries))[:48]
-    bgs, tmp = backgrounds(), Path(tempfile.mkdtemp())
+    tmp, bgs = Path(tempfile.mkdtemp()), backgrounds()
     predictor = Predictor.load(Path(shipped_model()), "auto")
     rows = []
-    for k, idx in enumerate(picks[: args.composites]):
-        obj = ds.load_object(entries[idx])
-        view = int(rng.integers(len(obj.record.frames)))
-        shadow, bg = bool(k % 2), BACKGROUNDS[k % len(BACKGROUNDS)]
-        same_draws = copy.deepcopy(rng)  # the white version: the same size and place
-        rgb, truth = composite(obj.rgb(view), obj.affordance(view) > 0, bgs[bg], shadow, rng)
-        white, _ = composite(obj.rgb(view), obj.affordance(view) > 0, np.full_like(bgs[bg], 255), False, same_draws)
-        for name, image in (("c.png", rgb), ("m.png", truth.astype(np.uint8) * 255), ("w.png", white)):
+    for c in bench_composites(args.data, 0, args.composites):
+        obj, view = c.obj, c.view
+        white_photo = np.full_like(bgs[c.background], 255)  # the same size and place, on white
+        white, _ = composite(obj.rgb(view), obj.affordance(view) > 0, white_photo, False, c.draws)
+        for name, image in (("c.png", c.rgb), ("m.png", c.truth.astype(np.uint8) * 255), ("w.png", white)):
             Image.fromarray(image).save(tmp / name)
         Image.fromarray(obj.rgb(view)).save(tmp / "r.png")
         others, truth_3d = [i for i in range(len(obj.record.frames)) if i != view], true_samples(obj, 0)
-        row = {"object": obj.record.object_id, "background": bg}
+        row = {"object": obj.record.object_id, "background": c.background}
         for kind, photo, mask in zip(KINDS, ("c.png", "w.png", "r.png"), (tmp / "m.png", None, None), strict=True):
             scores = score_photo(predictor, obj, tmp / photo, others, 30, truth_3d, mask=mask)
             row[kind] = {m: round(float(v), 4) for m, v in scores.items()}
         rows.append(row)
-        print(k, row, flush=True)
+        print(c.index, row, flush=True)
     summary = {n: {m: round(float(np.mean([r[n][m] for r in rows])), 4) for m in ("miou", "fscore_1cm")} for n in KINDS}
     print(json.dumps(summary))
     args.out.write_text(json.dumps({"summary": summary, "rows": rows}, indent=1) + "\n")

@@ -76,8 +76,8 @@ def _package_folder(name: str) -> Path | None:
 
 
 def panorama_views(panorama: np.ndarray, views: int = 4) -> list[np.ndarray]:
-    """``views`` (H/2, W/views·4/3, 3) views around an (H, W, 3) equirectangular panorama: its band within 45° of
-    the horizon (where it is least stretched), cut into overlapping pieces of 120° (wrapping round).
+    """``views`` (H/2, W/3, 3) views around an (H, W, 3) equirectangular panorama: its band within 45° of the
+    horizon (where it is least stretched), cut into pieces of 120° starting every 360°/``views`` (wrapping round).
 
     Example:
         >>> [v.shape for v in panorama_views(np.zeros((512, 1024, 3), np.uint8))]

@@ -21,7 +21,7 @@ normalised here as U²-Net expects, padded to a multiple of 32.
 from __future__ import annotations
 
 import pickle
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -32,7 +32,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from affnerf.errors import input_error
-from affnerf.model.u2netp import U2NetP, normalise
+from affnerf.model.u2netp import U2NetP, check_weights, load_onnx_weights, normalise, weights_path
 
 #: Probability above which a pixel is object.
 SEGMENTER_THRESHOLD = 0.5
@@ -121,6 +121,19 @@ Segmenter = ObjectSegmenter | SalientSegmenter
 def build_segmenter(config: SegmenterConfig) -> Segmenter:
     """A new segmenter of ``config``'s kind, random weights."""
     return SalientSegmenter(config) if config.kind == "u2netp" else ObjectSegmenter(config)
+
+
+def salient_segmenter(config: SegmenterConfig) -> SalientSegmenter:
+    """A U²-Net-p segmenter of ``config``'s shape (its kind set to ``u2netp``) carrying the salient-object model's
+    published weights (the optional extra ``affnerf[segment]``; SHA-256 checked), in eval mode.
+
+    Raises:
+        SalientUnavailable: the optional extra is not installed.
+    """
+    model = build_segmenter(replace(config, kind="u2netp"))
+    path = weights_path()
+    load_onnx_weights(model.net, check_weights(path), path)
+    return model.eval()
 
 
 def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tensor, tuple[int, int]]:

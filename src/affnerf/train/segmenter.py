@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,12 +26,14 @@ from affnerf.data.composite import Cutout, cut_to_box, largest_component, photo_
 from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import (
+    SEGMENTER_THRESHOLD,
     SalientSegmenter,
     Segmenter,
     SegmenterConfig,
     build_segmenter,
     object_probability,
     read_segmenter,
+    salient_segmenter,
     save_segmenter,
 )
 from affnerf.train.augment import blur_and_noise, jitter_colour
@@ -104,25 +106,23 @@ def load_cutouts(dataset: Dataset, split: str, views: int, rng: np.random.Genera
 
 def subject_cutouts(photos: list[np.ndarray], count: int, rng: np.random.Generator) -> list[Cutout]:
     """Up to ``count`` whole things cut out of random 4:3 crops of ``photos`` (zoomed 1-2.5×): the largest region
-    the salient-object model marks (p > 0.5) in each, kept when it covers 3-60 % of the crop. Empty (with a
-    warning) when the model is not installed."""
-    from affnerf.model.u2netp import SalientUnavailable, check_weights, load_onnx_weights, weights_path
+    the salient-object model marks (p > 0.5) in each, kept when it covers 3-60 % of the crop (at most ``4 count``
+    crops are tried). Empty (with a warning) when the model is not installed."""
+    from affnerf.model.u2netp import SalientUnavailable
 
     try:
-        path = weights_path()
-        model = build_segmenter(SegmenterConfig(kind="u2netp", input_side=320))
-        load_onnx_weights(model.net, check_weights(path), path)
+        model = salient_segmenter(SegmenterConfig(input_side=320))
     except SalientUnavailable as err:
         logger.warning("no subjects pasted: %s", err)
         return []
     cutouts = []
-    for _ in range(4 * count):
-        if len(cutouts) == count or not photos:
-            break
+    for _ in range(4 * count if photos else 0):
         crop = photo_crop(rng, photos[rng.integers(len(photos))], (320, 240))
-        mask = largest_component(object_probability(model.eval(), crop) > 0.5)
+        mask = largest_component(object_probability(model, crop) > SEGMENTER_THRESHOLD)
         if 0.03 <= mask.mean() <= 0.6:
             cutouts.append(cut_to_box(crop, mask))
+        if len(cutouts) == count:
+            break
     return cutouts
 
 
@@ -164,12 +164,7 @@ def initial_segmenter(cfg: SegmenterTrainConfig) -> Segmenter:
         return read_segmenter(Path(cfg.init))
     if not cfg.init_salient:
         return build_segmenter(cfg.network)
-    from affnerf.model.u2netp import check_weights, load_onnx_weights, weights_path
-
-    model = build_segmenter(replace(cfg.network, kind="u2netp"))
-    path = weights_path()
-    load_onnx_weights(model.net, check_weights(path), path)
-    return model
+    return salient_segmenter(cfg.network)
 
 
 def learning_rate(peak: float, step: int, steps: int) -> float:
