@@ -1,5 +1,6 @@
-"""``affnerf eval grasp`` end to end on a tiny run: the 2×2 (true or predicted mesh × whole surface or task part),
-scores on the true mesh at metric size, Table 3; and the summary on hand-built numbers."""
+"""``affnerf eval grasp`` end to end on a tiny run: the true or predicted mesh × whole surface or task part, and the
+true mesh restricted to the predicted task part; scores on the true mesh at metric size, Table 3; and the summary on
+hand-built numbers."""
 
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
         assert len(true_whole["on_part"]) == true_whole["grasps"]
         part = o["true_part"]
         assert part["grasps"] == 0 or all(part["on_part"])  # planned on the true part, scored on it
+        relabelled = o["true_predictedpart"]
+        assert len(relabelled["on_part"]) == relabelled["grasps"] and len(relabelled["epsilon"]) == relabelled["grasps"]
+        assert relabelled["grasps"] > 0 or relabelled["no_grasp"]
     metrics = json.loads((out / "grasp_metrics.json").read_text())
     assert set(metrics["mean"]) == set(CONDITIONS)
     assert metrics["categories"]["screwdriver"]["true_whole"]["epsilon_ratio"] == pytest.approx(1.0)
@@ -39,9 +43,32 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
     assert "L1 grasp wrench space" in table and "μ = 0.5" in table and "soft-finger" in table
     assert "| | bottle | screwdriver | Average |" in table and "Physics lift success" in table
     assert "Lift-and-disturb success" in table
-    for category in ("bottle", "screwdriver"):  # four panels: a title strip and three 200 px views each
+    for category in ("bottle", "screwdriver"):  # five panels: a title strip and three 200 px views each
         picture = np.asarray(Image.open(out / f"grasps_{category}.png"))
-        assert picture.shape == (4 * (18 + 200), 600, 3) and picture.std() > 10
+        assert picture.shape == (5 * (18 + 200), 600, 3) and picture.std() > 10
+
+
+def test_the_true_mesh_takes_the_predicted_fields_labels(trained_runs, train_dataset):
+    from affnerf.data.dataset import Dataset
+    from affnerf.eval.grasps import predict_object, with_predicted_labels
+    from affnerf.grasp.target import GraspObject
+    from affnerf.meshio import read_labelled_ply
+    from affnerf.predict.loading import load_model
+    from affnerf.predict.mesh import label_faces
+
+    ds = Dataset.open(train_dataset)
+    obj = ds.load_object(ds.objects("train", ["screwdriver"])[0])
+    true = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), "true")
+    loaded = load_model(trained_runs["affnerf"], "cpu")
+    prediction = predict_object(loaded, obj, 0, fit_steps=2)
+    relabelled = with_predicted_labels(prediction, true)
+    assert prediction.fitted and np.array_equal(relabelled.vertices, true.vertices)
+    assert relabelled.face_affordance.shape == true.face_affordance.shape and relabelled.face_affordance.min() >= 1
+    fitted = label_faces(true.vertices, true.faces, loaded.model.point_fields(prediction.encoding)[1])
+    first = label_faces(true.vertices, true.faces, loaded.model.point_fields(prediction.first)[1])
+    assert np.array_equal(relabelled.face_affordance, fitted)
+    assert np.array_equal(relabelled.face_agrees, first == fitted)
+    assert with_predicted_labels(prediction, true, agreement=False).face_agrees is None
 
 
 def _cond(eps, on, lift):
@@ -55,6 +82,7 @@ def test_summary_ratios_shares_and_objects_without_grasps():
             "category": "cabinet",
             "true_whole": _cond([0.2, 0.4], [True, False], [True]),
             "true_part": _cond([0.15], [True], [False]),
+            "true_predictedpart": _cond([0.3], [False], [True]),
             "predicted_whole": empty,
             "predicted_part": _cond([0.1], [False], [True]),
         },
@@ -62,6 +90,7 @@ def test_summary_ratios_shares_and_objects_without_grasps():
             "category": "cabinet",
             "true_whole": _cond([0.1], [True], [False]),
             "true_part": empty,
+            "true_predictedpart": _cond([0.1], [True], [True]),
             "predicted_whole": _cond([0.2], [True], [True]),
             "predicted_part": _cond([0.05], [True], [True]),
         },
@@ -76,11 +105,14 @@ def test_summary_ratios_shares_and_objects_without_grasps():
     assert c["true_whole"]["lift_success"] == 0.5 and c["predicted_whole"]["lift_success"] == 1.0
     assert c["true_part"]["disturb_success"] is None
     assert s["mean"]["true_part"]["epsilon_ratio"] == pytest.approx(0.075 / 0.2)
+    assert c["true_predictedpart"]["epsilon_ratio"] == pytest.approx(0.2 / 0.2)  # against the true whole surface
+    assert c["true_predictedpart"]["on_part_share"] == 0.5
     table = table3_markdown(s, {"split": "test"})
-    assert "| True mesh, task part only | 0.0750 | 0.0750 |" in table
+    assert "| True mesh, true task part | 0.0750 | 0.0750 |" in table
+    assert "| True mesh, predicted task part | 0.2000 | 0.2000 |" in table
     ratio = f"{c['true_part']['epsilon_ratio']:.2f}"  # 0.375 give or take rounding
     assert (
-        f"| True mesh, task part only | {ratio} | {ratio} |" in table
+        f"| True mesh, true task part | {ratio} | {ratio} |" in table
         and "| True mesh, whole surface | 1.00 | 1.00 |" in table
     )
 
@@ -92,6 +124,7 @@ def test_a_meshs_two_rows_average_over_the_same_categories():
             "category": "cabinet",
             "true_whole": _cond([0.1], [False], [False]),
             "true_part": _cond([0.1], [True], [False]),
+            "true_predictedpart": _cond([0.1], [True], [False]),
             "predicted_whole": _cond([0.1], [False], [False]),
             "predicted_part": empty,
         },
@@ -99,6 +132,7 @@ def test_a_meshs_two_rows_average_over_the_same_categories():
             "category": "pen",
             "true_whole": _cond([0.2], [True], [True]),
             "true_part": _cond([0.2], [True], [True]),
+            "true_predictedpart": _cond([0.2], [True], [True]),
             "predicted_whole": _cond([0.2], [True], [True]),
             "predicted_part": _cond([0.2], [True], [True]),
         },

@@ -38,15 +38,16 @@ def table2(config: Annotated[EvalConfig, tyro.conf.arg(name="")]) -> None:
 
 @app.command(name="grasp")
 def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
-    """Grasps like the paper's Table 3, as a 2×2 (conventions §6).
+    """Grasps like the paper's Table 3 (conventions §6).
 
     For each test object: plan grasps on {its true mesh, the affordance model predicted from one image (fitted to
     that image by --fit-steps of test-time inversion, as affnerf predict does; 0 = the encoder's codes)} ×
-    {the whole surface, the task's affordance only (grasp; cabinet: pull)}; score every grasp on the true mesh at
-    the object's metric size (canonical / scale, or --object-size): mean Ferrari-Canny epsilon and its ratio to
-    the whole surface of the same mesh, the share of grasps with both contacts on the true task part, the lift
-    success rate in physics and, beside it, lift-and-disturb success. Writes OUT/table3.md, OUT/grasp_metrics.json
-    and OUT/grasp_objects.json.
+    {the whole surface, the task's affordance only (grasp; cabinet: pull)}, and on the true mesh restricted to the
+    task part its faces get from the predicted field (the predicted affordance without the predicted shape's
+    error); score every grasp on the true mesh at the object's metric size (canonical / scale, or
+    --object-size): mean Ferrari-Canny epsilon and its ratio to the whole surface of the same mesh, the share of
+    grasps with both contacts on the true task part, the lift success rate in physics and, beside it,
+    lift-and-disturb success. Writes OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
     """
     from affnerf.eval.grasp_table import METRICS
     from affnerf.eval.grasps import run_grasp_eval

@@ -1,5 +1,6 @@
-"""Table 3 of ``affnerf eval grasp`` as a 2×2 (conventions §6): {true mesh, mesh predicted from one image} ×
-{whole surface, the task's affordance only}, every grasp scored on the true mesh at metric size."""
+"""Table 3 of ``affnerf eval grasp`` (conventions §6): {true mesh, mesh predicted from one image} × {whole
+surface, the task's affordance only}, and the true mesh restricted to the task part its faces get from the
+predicted field; every grasp scored on the true mesh at metric size."""
 
 from __future__ import annotations
 
@@ -10,13 +11,16 @@ import numpy as np
 from affnerf.grasp.quality import CONE_EDGES, MU, TORSION
 
 MESHES = ("true", "predicted")  #: where grasps are planned
-SURFACES = ("whole", "part")  #: on the whole surface, or on the task's affordance only
-CONDITIONS = tuple(f"{m}_{s}" for m in MESHES for s in SURFACES)
+#: Each condition is ``<mesh>_<surface>``: the whole surface, the task part of the mesh's own labels, and on the
+#: true mesh also the task part of the labels the predicted field gives its faces (the effect of the predicted
+#: affordance without the error of the predicted shape).
+CONDITIONS = ("true_whole", "true_part", "true_predictedpart", "predicted_whole", "predicted_part")
 LABELS = {
     "true_whole": "True mesh, whole surface",
-    "true_part": "True mesh, task part only",
+    "true_part": "True mesh, true task part",
+    "true_predictedpart": "True mesh, predicted task part",
     "predicted_whole": "Predicted from one image, whole surface",
-    "predicted_part": "Predicted from one image, task part only",
+    "predicted_part": "Predicted from one image, predicted task part",
 }
 #: The affordance a category is grasped by (the task part); `grasp` for any category not listed.
 TASK_AFFORDANCE = {"cabinet": "pull"}
@@ -32,23 +36,32 @@ def task_affordance(category: str) -> str:
     return TASK_AFFORDANCE.get(category, "grasp")
 
 
+def mesh_of(condition: str) -> str:
+    """The mesh (:data:`MESHES`) a condition plans on.
+
+    >>> mesh_of("true_predictedpart")
+    'true'
+    """
+    return condition.split("_")[0]
+
+
 def whole_of(condition: str) -> str:
     """The unrestricted condition on the same mesh.
 
-    >>> whole_of("predicted_part")
-    'predicted_whole'
+    >>> whole_of("predicted_part"), whole_of("true_predictedpart")
+    ('predicted_whole', 'true_whole')
     """
-    return condition.split("_")[0] + "_whole"
+    return mesh_of(condition) + "_whole"
 
 
-def same_mesh(condition: str) -> tuple[str, str]:
-    """Both conditions planned on the mesh of ``condition``, whole surface first.
+def same_mesh(condition: str) -> tuple[str, ...]:
+    """Every condition planned on the mesh of ``condition``, whole surface first (a category counts in their
+    means only where all of them have a value, so that the rows of a mesh stay comparable).
 
     >>> same_mesh("true_whole")
-    ('true_whole', 'true_part')
+    ('true_whole', 'true_part', 'true_predictedpart')
     """
-    mesh = condition.split("_")[0]
-    return f"{mesh}_whole", f"{mesh}_part"
+    return tuple(c for c in CONDITIONS if mesh_of(c) == mesh_of(condition))
 
 
 def _mean(values: list) -> float | None:
@@ -78,9 +91,9 @@ def summarise(objects: list[dict[str, Any]]) -> dict[str, Any]:
     grasps with both contacts on the true task part, lift (and disturb) success, grasps, objects and objects
     without grasps; and the mean over categories (its ratio is the ratio of the mean epsilons).
 
-    A share or success rate is undefined in a category where a condition has no grasp. So that the two rows of
-    a mesh stay comparable, their means cover the same categories: those where both are defined; the others are
-    listed in ``mean[cond]["left_out"][metric]``.
+    A share or success rate is undefined in a category where a condition has no grasp. So that the rows of a mesh
+    stay comparable, their means cover the same categories: those where every row of the mesh is defined; the
+    others are listed in ``mean[cond]["left_out"][metric]``.
     """
     out: dict[str, Any] = {"categories": {}, "mean": {}}
     cats = sorted({o["category"] for o in objects})
@@ -145,10 +158,10 @@ def _left_out_note(summary: dict[str, Any], key: str) -> list[str]:
 
 
 def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
-    """Markdown of the 2×2: one table per metric, rows = conditions, columns = categories and their average."""
+    """Markdown of Table 3: one table per metric, rows = conditions, columns = categories and their average."""
     cats = sorted(summary["categories"])
     header = ["| | " + " | ".join(cats) + " | Average |", "|" + " --- |" * (len(cats) + 2)]
-    lines = [f"# Grasps on {context.get('split', 'test')} objects: true or predicted mesh × whole surface or part", ""]
+    lines = [f"# Grasps on {context.get('split', 'test')} objects: the true or predicted mesh, whole or task part", ""]
     lines += [f"Every grasp is scored on the true mesh. ε: {epsilon_convention()}.", ""]
     for key in METRICS:
         lines += [f"**{_TITLES[key]}**", "", *header]

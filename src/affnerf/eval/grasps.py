@@ -1,12 +1,13 @@
-"""``affnerf eval grasp``: the paper's Table 3 as a 2×2 (conventions §6).
+"""``affnerf eval grasp``: the paper's Table 3 (conventions §6).
 
 For each object, grasps are planned on {its true mesh, the affordance model AFF-NeRF predicts from one image} ×
-{the whole surface, the task's affordance only (``grasp``; cabinet: ``pull``)}. Every grasp is then scored on the
-true mesh at the object's metric size (canonical / ``scale`` of its ``transforms.json``, or ``--object-size``):
-Ferrari-Canny epsilon, whether both contacts lie on the true task part (a grasp on a screwdriver's shaft fails the
-task however stable it is), and a physics lift test of the best few, then a
-disturbance (a turn about the closing axis and a shake) of those lifted. The predicted model is brought to metric
-size by the same factor as the true mesh. The table itself is :mod:`affnerf.eval.grasp_table`.
+{the whole surface, the task's affordance only (``grasp``; cabinet: ``pull``)}, and on the true mesh restricted to
+the task part of the labels the predicted field gives its faces (the predicted affordance without the predicted
+shape's error). Every grasp is then scored on the true mesh at the object's metric size (canonical / ``scale`` of
+its ``transforms.json``, or ``--object-size``): Ferrari-Canny epsilon, whether both contacts lie on the true task
+part (a grasp on a screwdriver's shaft fails the task however stable it is), and a physics lift test of the best
+few, then a disturbance (a turn about the closing axis and a shake) of those lifted. The predicted model is
+brought to metric size by the same factor as the true mesh. The table itself is :mod:`affnerf.eval.grasp_table`.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.errors import AffnerfError
-from affnerf.eval.grasp_table import CONDITIONS, summarise, table3_markdown, task_affordance
+from affnerf.eval.grasp_table import CONDITIONS, mesh_of, summarise, table3_markdown, task_affordance, whole_of
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.grasp.explain import explain_no_grasps
@@ -42,7 +43,7 @@ from affnerf.model.inputs import dataset_views
 from affnerf.predict.agreement import AGREEMENT_DISTANCE, confirmed
 from affnerf.predict.invert import InversionConfig, dataset_crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
-from affnerf.predict.mesh import model_mesh
+from affnerf.predict.mesh import label_faces, model_mesh
 from affnerf.predict.predictor import pick_device
 
 __all__ = ["CONDITIONS", "GraspEvalConfig", "evaluate_object", "run_grasp_eval", "summarise", "table3_markdown"]
@@ -72,7 +73,8 @@ class GraspEvalConfig:
         seed: seed of the input-view choice and the planner.
         device: ``auto``, ``cpu`` or ``cuda``.
         object_size: every object's largest side in metres (None: each object's own, from its ``scale``).
-        pictures: write OUT/grasps_<category>.png: the first object's four planning meshes with their best grasps.
+        pictures: write OUT/grasps_<category>.png: the first object's planning meshes, one per condition, with
+            their best grasps.
         part_margin: in the task-part conditions, contacts keep this distance (metres, at metric size) from the
             surface of other labels (:class:`~affnerf.grasp.planner.PlanConfig`).
         fit_steps: steps of test-time inversion of the predicted models to their input view (as ``affnerf
@@ -118,31 +120,60 @@ class GraspEvalConfig:
     rank: Literal["epsilon", "hold"] = RANK
 
 
-def predicted_object(
-    loaded: LoadedModel,
-    obj: ObjectData,
-    view: int,
-    resolution: int,
-    level: float | None = None,
-    fit_steps: int = 0,
-    agreement_distance: float = 0.0,
-) -> GraspObject:
-    """The affordance model AFF-NeRF predicts from one view of a dataset object, as a graspable mesh (with
-    ``fit_steps`` of test-time inversion to that view first, as ``affnerf predict`` does; 0 = none). With both
-    and ``agreement_distance`` > 0, the mesh's faces carry ``confirmed`` (:func:`affnerf.predict.agreement.confirmed`
-    against the encoder's codes' own mesh), read as the object's ``face_agrees``."""
+@dataclass(frozen=True)
+class Prediction:
+    """One object's affordance model predicted from one view.
+
+    Attributes:
+        model: the model that predicted it.
+        first: the encoder's codes of the view.
+        encoding: the codes used (fitted to the view, or ``first``).
+        fitted: whether ``encoding`` was fitted to the view.
+    """
+
+    model: Any
+    first: Any
+    encoding: Any
+    fitted: bool
+
+
+def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: int = 0) -> Prediction:
+    """Encode one view of a dataset object, then (``fit_steps`` > 0) fit the codes to it for that many steps of
+    test-time inversion, as ``affnerf predict`` does."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
-    encoding = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
-    first = encoding
-    if fit_steps > 0:
-        target = dataset_crop_target(obj, view, model.config.encoder_resolution)
-        config = InversionConfig(steps=fit_steps, seed=view)
-        encoding = invert(model, encoding, target, np.asarray(loaded.background), config).codes
+    first = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
+    if fit_steps <= 0:
+        return Prediction(model, first, first, False)
+    target = dataset_crop_target(obj, view, model.config.encoder_resolution)
+    config = InversionConfig(steps=fit_steps, seed=view)
+    return Prediction(model, first, invert(model, first, target, np.asarray(loaded.background), config).codes, True)
+
+
+def predicted_object(
+    prediction: Prediction, name: str, resolution: int, level: float | None = None, agreement_distance: float = 0.0
+) -> GraspObject:
+    """The predicted affordance model as a graspable mesh (canonical frame). For fitted codes and
+    ``agreement_distance`` > 0, its faces carry ``confirmed`` (:func:`affnerf.predict.agreement.confirmed` against
+    the encoder's codes' own mesh), read as the object's ``face_agrees``."""
+    model, encoding = prediction.model, prediction.encoding
     mesh = model_mesh(model, encoding, resolution, level, model.occupancy(encoding))
-    if fit_steps > 0 and agreement_distance > 0:
+    if prediction.fitted and agreement_distance > 0:
+        first = prediction.first
         mesh = confirmed(mesh, model_mesh(model, first, resolution, level, model.occupancy(first)), agreement_distance)
-    return GraspObject.from_mesh(mesh, f"{obj.record.object_id} (predicted)")
+    return GraspObject.from_mesh(mesh, f"{name} (predicted)")
+
+
+def with_predicted_labels(prediction: Prediction, mesh: GraspObject, agreement: bool = True) -> GraspObject:
+    """``mesh`` (the true one, canonical frame) with its faces labelled by the predicted field at their centres
+    (:func:`affnerf.predict.mesh.label_faces`): the predicted affordance on the true geometry. For fitted codes
+    and ``agreement``, ``face_agrees`` marks the faces where the encoder's own field gives the same label (the
+    planner tries those first, as on the predicted mesh)."""
+    labels = label_faces(mesh.vertices, mesh.faces, prediction.model.point_fields(prediction.encoding)[1])
+    agrees = None
+    if prediction.fitted and agreement:
+        agrees = label_faces(mesh.vertices, mesh.faces, prediction.model.point_fields(prediction.first)[1]) == labels
+    return GraspObject(mesh.vertices, mesh.faces, labels, f"{mesh.name} (predicted labels)", agrees)
 
 
 def object_size(obj: ObjectData, canonical: GraspObject, config: GraspEvalConfig) -> ObjectSize:
@@ -216,24 +247,34 @@ def condition_settings(plan: PlanConfig, mesh: str, affordance: str, config: Gra
     return replace(settings, width_clearance=config.predicted_clearance) if mesh == "predicted" else settings
 
 
+def planning_meshes(
+    canonical: GraspObject, prediction: Prediction, factor: float, config: GraspEvalConfig
+) -> dict[str, GraspObject]:
+    """Each condition's labelled metric mesh (:data:`CONDITIONS`): the true mesh with its true labels, the true
+    mesh labelled by the predicted field (``true_predictedpart``), and the predicted mesh."""
+    true = scaled(canonical, factor)
+    relabelled = scaled(with_predicted_labels(prediction, canonical, config.agreement_distance > 0), factor)
+    predicted = scaled(
+        predicted_object(prediction, canonical.name, config.resolution, config.level, config.agreement_distance),
+        factor,
+    )
+    meshes = {"true": true, "predicted": predicted}
+    return {cond: relabelled if cond == "true_predictedpart" else meshes[mesh_of(cond)] for cond in CONDITIONS}
+
+
 def evaluate_object(
     loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig, picture: Path | None = None
 ) -> dict[str, Any]:
-    """The four conditions on one object (:data:`CONDITIONS`): per condition, epsilon, on-task-part flags and
+    """Every condition on one object (:data:`CONDITIONS`): per condition, epsilon, on-task-part flags and
     lift results per grasp, all on the true mesh at metric size; and the size and mass used. With ``picture``,
     also a PNG there of each condition's planning mesh with its best grasps."""
     canonical = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
     size = object_size(obj, canonical, config)
-    gt = scaled(canonical, size.factor)
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
-    predicted = scaled(
-        predicted_object(
-            loaded, obj, view, config.resolution, config.level, config.fit_steps, config.agreement_distance
-        ),
-        size.factor,
-    )
+    meshes = planning_meshes(canonical, predict_object(loaded, obj, view, config.fit_steps), size.factor, config)
+    gt = meshes["true_whole"]
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(
         num=config.num,
@@ -252,12 +293,12 @@ def evaluate_object(
         "mass": round(mass, 4),
     }
     panels = {}
-    for name, mesh in (("true", gt), ("predicted", predicted)):
-        for surface, affordance in (("whole", "none"), ("part", task)):
-            planning = mesh if surface == "part" else GraspObject(mesh.vertices, mesh.faces, None, mesh.name)
-            cond, settings = f"{name}_{surface}", condition_settings(plan, name, affordance, config)
-            grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
-            panels[cond] = (mesh, grasps)
+    for cond, mesh in meshes.items():
+        whole = cond == whole_of(cond)
+        planning = GraspObject(mesh.vertices, mesh.faces, None, mesh.name) if whole else mesh
+        settings = condition_settings(plan, mesh_of(cond), "none" if whole else task, config)
+        grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
+        panels[cond] = (mesh, grasps)
     if picture is not None:
         from affnerf.eval.grasp_pictures import write_category_picture
 

@@ -141,6 +141,26 @@ def face_confidence(mesh: LabelledMesh, probabilities: PointFn, chunk: int = POI
     return np.floor(np.clip(chosen, 0.0, 1.0) * 100.0 + 1e-6).astype(np.uint8)
 
 
+def label_faces(vertices: np.ndarray, faces: np.ndarray, labels: PointFn, chunk: int = POINTS_PER_CHUNK) -> np.ndarray:
+    """(F,) int64 class ids a field gives at the centres of a mesh's faces: a mesh from elsewhere (the true mesh
+    of a dataset object, a scan) labelled by a predicted affordance field, in the field's frame.
+
+    Args:
+        vertices: (V, 3); faces: (F, 3).
+        labels: (N, 3) float32 points -> (N,) class ids (``model.point_fields(encoding)[1]``).
+        chunk: points per call.
+
+    Example:
+        >>> tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, -3]])
+        >>> label_faces(tri, np.array([[0, 1, 2], [0, 1, 3]]), lambda p: 1 + (p[:, 2] < 0).long()).tolist()
+        [1, 2]
+    """
+    if not len(faces):
+        return np.zeros(0, np.int64)
+    centres = np.asarray(vertices, np.float32)[np.asarray(faces)].mean(axis=1)
+    return evaluate_points(labels, centres, chunk).astype(np.int64)
+
+
 def extract_labelled_mesh(
     density: PointFn,
     labels: PointFn,
