@@ -137,11 +137,12 @@ for held in teapot scissors; do
         --method semantic-nerf --input-views 3 --semantic-steps 200 --out "$U" $BASE_UNSEEN
 done
 
-# 7. Table 3 as a 2x2 (true or predicted mesh x whole surface or task part), 5 test objects of each of the 8 categories,
+# 7. Table 3 (true or predicted mesh x whole surface or task part, and the true mesh restricted to the task part the
+#    predicted field labels on it), 5 test objects of each of the 8 categories,
 #    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
 #    default 1 cm part margin (chosen on validation objects by
 #    benchmarks/grasp_margin.py), the predicted part planned first where the prediction before the fit agrees;
-#    about 10 minutes on one core (committed run: the two halves of the categories side by side, 6 min 28 s,
+#    about 15 minutes on one core (committed run: the two halves of the categories side by side, 8 min 48 s,
 #    merged by benchmarks/merge_grasps.py; every object is evaluated on its own, so it equals this one command)
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
