@@ -169,14 +169,22 @@ def timed(fn, *args) -> tuple[Any, float]:
 
 
 def measure_map(
-    rgb: np.ndarray, truth: np.ndarray, name: str, probability: Any, threshold: float, iou: dict, secs: dict
+    rgb: np.ndarray,
+    truth: np.ndarray,
+    name: str,
+    probability: Any,
+    threshold: float,
+    iou: dict,
+    secs: dict,
+    mask_of: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """Score a per-pixel object probability (a function of the photo) as method ``name`` and, edges redrawn by
-    GrabCut, as ``name+grabcut refine``, into ``iou`` and ``secs``; returns the map, its mask and the threshold
-    sweep."""
+    GrabCut, as ``name+grabcut refine``, into ``iou`` and ``secs``; returns the map, its mask (``mask_of(map)``, by
+    default the largest region above ``threshold``) and the threshold sweep (largest region above each)."""
     prob, secs[name] = timed(probability, rgb)
     sweep = {t: segment.mask_iou(segment.largest_component(prob > t), truth) for t in THRESHOLDS}
-    mask, more = timed(segment.largest_component, prob > threshold)
+    mask_of = mask_of or (lambda p: segment.largest_component(p > threshold))
+    mask, more = timed(mask_of, prob)
     secs[name] += more
     iou[name] = segment.mask_iou(mask, truth)
     refined, secs[f"{name}+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
@@ -193,7 +201,7 @@ def measure_segmenter(
     iou, secs = {}, {}
     prob, mask, sweep = measure_map(
         rgb, truth, "segmenter", lambda x: segnet.object_probability(segmenter, x), segnet.SEGMENTER_THRESHOLD, iou,
-        secs,
+        secs, segnet.probability_mask,
     )  # fmt: skip
     for name, box in boxes.items():
         seg, secs[f"segmenter --box{name}"] = timed(segment.segment, rgb, "segmenter", "composite", path, box)
@@ -352,6 +360,8 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "refine_salient": segment.REFINE_SALIENT,
         "segmenter": str(args.segmenter),
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
+        "segmenter_low_threshold": segnet.SEGMENTER_LOW_THRESHOLD,
+        "segmenter_extra": [segnet.SEGMENTER_EXTRA_CONFIDENCE, segnet.SEGMENTER_EXTRA_SIZE],
         "onnx_threads": salient.SESSION_THREADS,
         "box_padding": BOX_PADDING,
         "tight_box_padding": TIGHT_PADDING,

@@ -3,10 +3,10 @@ to the box, GrabCut in the box, or the first when the segmenter is sure enough (
 
 On the composites of ``bench_segment.py`` (the same seeded draws and boxes), for each composite and box (loose: the
 true box 5-25 % larger per side; tight: 0-5 %): the IoU with the true mask of the shipped segmenter's mask of the
-whole photo cut to the box (largest component), its confidence (mean probability over that mask), and the IoU of
-GrabCut from the box (``segment_in_box`` with no segmenter). Prints the mean IoU of the rule "the segmenter's mask
-when its confidence is at least T, else GrabCut" for several T; ``segment.BOX_SEGMENTER_CONFIDENCE`` was chosen on
-``--seed 1`` and checked on ``--seed 0``.
+whole photo made inside the box (``segmenter_segmentation``), its confidence (mean probability over that mask), and
+the IoU of GrabCut from the box (``segment_in_box`` with no segmenter). Prints the mean IoU of the rule "the
+segmenter's mask when its confidence is at least T, else GrabCut" for several T;
+``segment.BOX_SEGMENTER_CONFIDENCE`` was chosen on ``--seed 1`` and checked on ``--seed 0``.
 
 Run::
 

@@ -27,6 +27,24 @@ def test_probability_has_the_photos_size_whatever_its_shape():
         assert prob.shape == shape[:2] and prob.dtype == np.float32 and 0.0 <= prob.min() <= prob.max() <= 1.0
 
 
+def test_the_mask_keeps_a_faint_thin_part_and_sure_fragments_but_not_unsure_ones():
+    prob = np.zeros((20, 80), np.float32)
+    prob[5:15, 2:12] = 0.97  # a handle
+    prob[9:11, 12:26] = 0.45  # a thin shaft the segmenter is unsure of, joined to it
+    prob[8:12, 30:34] = 0.95  # a sure fragment beyond a gap
+    prob[0:3, 36:40] = 0.6  # an unsure blob
+    prob[8:12, 60:64] = 0.99  # a sure thing far away: another thing
+    prob[18:20, 0:20] = 0.45  # faint everywhere, joined to nothing sure
+    mask = segnet.probability_mask(prob)
+    assert mask[5:15, 2:12].all() and mask[9:11, 12:26].all() and mask[8:12, 30:34].all()
+    assert not mask[0:3, 36:40].any() and not mask[18:20].any() and not mask[:, 40:].any()
+    assert mask.sum() == 100 + 28 + 16
+    inside = np.zeros_like(mask)
+    inside[:, :20] = True  # a box: the fragment and the shaft's far end are outside
+    boxed = segnet.probability_mask(prob, inside)
+    assert boxed.sum() == 100 + 16 and not boxed[:, 20:].any()
+
+
 def test_save_and_load_give_the_same_probabilities(tmp_path):
     torch.manual_seed(0)
     model = segnet.ObjectSegmenter(TINY).eval()

@@ -36,6 +36,16 @@ from affnerf.model.u2netp import U2NetP, check_weights, load_onnx_weights, norma
 
 #: Probability above which a pixel is object.
 SEGMENTER_THRESHOLD = 0.5
+#: Probability above which a pixel is object when it joins (8-connected) pixels above :data:`SEGMENTER_THRESHOLD`
+#: (hysteresis, as Canny's edges: the faint middle of a thin shaft stays with its handle).
+SEGMENTER_LOW_THRESHOLD = 0.4
+#: Beside the largest region of the mask, other regions are kept where the segmenter is this sure of them on
+#: average (a screwdriver's tip cut off from its handle by a shaft it lost)...
+SEGMENTER_EXTRA_CONFIDENCE = 0.9
+#: ... at least this share of the largest region's size...
+SEGMENTER_EXTRA_SIZE = 0.01
+#: ... and within this share of the photo's larger side of it (a thing further away is another thing).
+SEGMENTER_EXTRA_DISTANCE = 0.1
 
 
 @dataclass(frozen=True)
@@ -164,6 +174,40 @@ def object_probability(model: Segmenter, rgb: np.ndarray) -> np.ndarray:
     prob = torch.sigmoid(logits).numpy().astype(np.float32)
     full = Image.fromarray(prob, mode="F").resize((rgb.shape[1], rgb.shape[0]), Image.BILINEAR)
     return np.clip(np.asarray(full, np.float32), 0.0, 1.0)
+
+
+def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
+    """(H, W) bool object mask of the segmenter's (H, W) probability map: pixels above
+    :data:`SEGMENTER_THRESHOLD`, with those above :data:`SEGMENTER_LOW_THRESHOLD` joined to them (hysteresis);
+    then, within ``inside`` ((H, W) bool, or everywhere), the largest 8-connected region and any other that the
+    segmenter is on average :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE`
+    of the largest's size and within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on
+    the composite benchmark's seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments").
+
+    Example:
+        >>> p = np.zeros((3, 20)); p[1, :3] = 0.95; p[1, 3] = 0.45; p[1, 5] = 0.95; p[0, 0] = 0.45; p[1, 15] = 0.99
+        >>> probability_mask(p).astype(int)[:2, :8].tolist(), bool(probability_mask(p)[1, 15])
+        ([[1, 0, 0, 0, 0, 0, 0, 0], [1, 1, 1, 1, 0, 1, 0, 0]], False)
+    """
+    from scipy import ndimage
+    from skimage.filters import apply_hysteresis_threshold
+
+    found = apply_hysteresis_threshold(np.asarray(prob, np.float32), SEGMENTER_LOW_THRESHOLD, SEGMENTER_THRESHOLD)
+    if inside is not None:
+        found &= inside
+    labels, count = ndimage.label(found, structure=np.ones((3, 3)))
+    if count <= 1:
+        return found
+    index = np.arange(1, count + 1)
+    sizes, means = ndimage.sum(found, labels, index), ndimage.mean(prob, labels, index)
+    main = int(np.argmax(sizes))
+    keep = (means >= SEGMENTER_EXTRA_CONFIDENCE) & (sizes >= SEGMENTER_EXTRA_SIZE * sizes[main])
+    keep[main] = False
+    if keep.any():
+        gap = ndimage.minimum(ndimage.distance_transform_edt(labels != main + 1), labels, index)
+        keep &= np.asarray(gap) <= SEGMENTER_EXTRA_DISTANCE * max(prob.shape)
+    keep[main] = True
+    return np.isin(labels, index[keep])
 
 
 def save_segmenter(model: Segmenter, path: Path, provenance: dict | None = None) -> None:

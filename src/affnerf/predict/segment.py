@@ -38,7 +38,7 @@ from scipy import ndimage
 
 from affnerf.data.composite import largest_component
 from affnerf.errors import AffnerfError
-from affnerf.model.segmenter import SEGMENTER_THRESHOLD, load_segmenter, object_probability
+from affnerf.model.segmenter import load_segmenter, object_probability, probability_mask
 from affnerf.predict import shipped
 from affnerf.predict.salient import INSTALL_HINT, SalientUnavailable, load_salient_model, salient_mask
 
@@ -71,13 +71,14 @@ GRABCUT_SEED = 0
 #: small margin, and a loose drawn one hardly minds.
 BOX_MARGIN = 0.02
 #: Smallest confidence of the object segmenter's mask cut to a ``--box`` for ``auto`` to take it instead of
-#: GrabCut in the box. Chosen on composites of another seed than the benchmark's (``bench_segment.py --seed 1``,
-#: the segmenter shipped on 2026-11-27): 0.8, 0.85, 0.9, 0.93 and 0.95 gave a mean mask IoU of 0.888, 0.909,
-#: 0.909, 0.883 and 0.878 in boxes 5-25 % larger than the object per side (GrabCut alone 0.871, the segmenter's
-#: mask alone 0.857), and 0.896, 0.930, 0.930, 0.896, 0.879 in boxes 0-5 % larger (0.881, 0.857). Run on the box
-#: as on a photo of its own, the segmenter was worse than GrabCut (0.54 and 0.19): it sees objects at the size
-#: they have in a photo.
-BOX_SEGMENTER_CONFIDENCE = 0.9
+#: GrabCut in the box. Chosen on composites of another seed than the benchmark's (``segment_box_rule.py --seed
+#: 1``) with the mask of :func:`~affnerf.model.segmenter.probability_mask`: 0.8, 0.85, 0.9, 0.93 and 0.95 gave a
+#: mean mask IoU of 0.911, 0.911, 0.897, 0.875 and 0.876 in boxes 5-25 % larger than the object per side (GrabCut
+#: alone 0.871, the segmenter's mask alone 0.861), and 0.931, 0.931, 0.927, 0.879, 0.881 in boxes 0-5 % larger
+#: (0.881, 0.862). (With the largest region above 0.5 as the mask, 0.9 had tied 0.85.) Run on the box as on a
+#: photo of its own, the segmenter was worse than GrabCut (0.54 and 0.19): it sees objects at the size they have
+#: in a photo.
+BOX_SEGMENTER_CONFIDENCE = 0.85
 #: Smallest side in pixels of a ``--box`` (after clipping to the image): a narrower one cannot hold an object and
 #: its background (GrabCut needs pixels of both; one 2 pixels wide crashed OpenCV before this check).
 MIN_BOX_SIDE = 8
@@ -262,19 +263,18 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
 
 
 def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None) -> Segmentation:
-    """The object segmenter's mask (probability above :data:`~affnerf.model.segmenter.SEGMENTER_THRESHOLD`, largest
-    component; inside ``box`` only when one is given, the network still seeing the whole photo) and its
-    confidence, the mean probability over the mask (0 when the mask is empty). GrabCut's edges are not drawn on
-    it: they moved the composite benchmark's mean mask IoU by +0.012 with the segmenter's second stage (0.748 →
-    0.760) and +0.006 with its third (0.794 → 0.800), for 0.1 s an image, within the noise of one benchmark run."""
+    """The object segmenter's mask (:func:`~affnerf.model.segmenter.probability_mask`; inside ``box`` only when one
+    is given, the network still seeing the whole photo) and its confidence, the mean probability over the mask (0
+    when the mask is empty). GrabCut's edges are not drawn on it: they moved the composite benchmark's mean mask
+    IoU by +0.012 with the segmenter's second stage (0.748 → 0.760) and +0.006 with its third (0.794 → 0.800), for
+    0.1 s an image, within the noise of one benchmark run."""
     prob = object_probability(model, rgb)
-    found = prob > SEGMENTER_THRESHOLD
+    inside = None
     if box is not None:
         x0, y0, x1, y1 = box
-        inside = np.zeros_like(found)
+        inside = np.zeros(prob.shape, bool)
         inside[y0:y1, x0:x1] = True
-        found &= inside
-    mask = largest_component(found)
+    mask = probability_mask(prob, inside)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
     return Segmentation(mask, "segmenter", confidence=confidence, box=box)
 
