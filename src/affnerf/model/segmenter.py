@@ -36,8 +36,8 @@ from affnerf.model.u2netp import U2NetP, check_weights, load_onnx_weights, norma
 
 #: Probability above which a pixel is object.
 SEGMENTER_THRESHOLD = 0.5
-#: Probability above which a pixel is object when it joins (8-connected) pixels above :data:`SEGMENTER_THRESHOLD`
-#: (hysteresis, as Canny's edges: the faint middle of a thin shaft stays with its handle).
+#: Probability above which a pixel is object when it is connected, through shared edges, to pixels above
+#: :data:`SEGMENTER_THRESHOLD` (hysteresis, as Canny's edges: the faint middle of a thin shaft stays with its handle).
 SEGMENTER_LOW_THRESHOLD = 0.4
 #: Beside the largest region of the mask, other regions are kept where the segmenter is this sure of them on
 #: average (a screwdriver's tip cut off from its handle by a shaft it lost)...
