@@ -150,6 +150,16 @@ def bench_composites(data: Path, seed: int, count: int) -> Iterator[BenchComposi
         yield BenchComposite(k, obj, view, bg, shadow, rgb, truth, box, tight, draws)
 
 
+def replay_args(doc: str) -> argparse.Namespace:
+    """``--data``, ``--composites`` (24) and ``--out`` of a script that replays the first composites' predictions
+    (``segment_true_mask.py``, ``segment_crop_box.py``)."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
+    parser.add_argument("--composites", type=int, default=24)
+    parser.add_argument("--out", type=Path, required=True)
+    return parser.parse_args()
+
+
 def measure_box(rgb: np.ndarray, truth: np.ndarray, boxes: dict[str, tuple[int, int, int, int]]) -> tuple[dict, dict]:
     """IoU and seconds of ``auto`` and ``salient`` confined to each box around the object (``predict --box``),
     as ``METHOD --box`` + the box's name."""

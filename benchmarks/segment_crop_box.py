@@ -15,7 +15,6 @@ Run::
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
@@ -32,7 +31,7 @@ from affnerf.predict.segment import mask_iou, segment
 from affnerf.predict.shipped import shipped_model
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import bench_composites, score_photo  # noqa: E402
+from bench_segment import bench_composites, replay_args, score_photo  # noqa: E402
 
 KINDS = ("auto mask", "auto mask, true crop", "auto mask grown 2 px", "true mask")
 
@@ -47,11 +46,7 @@ def with_true_crop(found: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
-    parser.add_argument("--composites", type=int, default=24)
-    parser.add_argument("--out", type=Path, required=True)
-    args = parser.parse_args()
+    args = replay_args(__doc__)
     tmp = Path(tempfile.mkdtemp())
     predictor = Predictor.load(Path(shipped_model()), "auto")
     rows = []

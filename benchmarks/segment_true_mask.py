@@ -11,7 +11,6 @@ Run::
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
@@ -25,17 +24,13 @@ from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import backgrounds, bench_composites, composite, score_photo  # noqa: E402
+from bench_segment import backgrounds, bench_composites, composite, replay_args, score_photo  # noqa: E402
 
 KINDS = ("composite, true mask", "white background, same size", "clean render")
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", type=Path, default=Path("/tmp/seg/data"))
-    parser.add_argument("--composites", type=int, default=24)
-    parser.add_argument("--out", type=Path, required=True)
-    args = parser.parse_args()
+    args = replay_args(__doc__)
     tmp, bgs = Path(tempfile.mkdtemp()), backgrounds()
     predictor = Predictor.load(Path(shipped_model()), "auto")
     rows = []
