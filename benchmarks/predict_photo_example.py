@@ -35,7 +35,7 @@ from affnerf.predict.segment import mask_iou
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import bench_composites  # noqa: E402
+from bench_composites import bench_composites  # noqa: E402
 
 #: Height in pixels of each panel of the picture.
 PANEL_HEIGHT = 200
@@ -45,7 +45,7 @@ Case = tuple[str, str, np.ndarray, np.ndarray, tuple[int, int, int, int]]
 
 def example_cases(data: Path, wanted: list[int], seed: int = 0) -> dict[int, Case]:
     """{k: (object id, background, rgb, true mask, box)} of composites ``wanted`` of ``bench_segment.py --seed
-    seed`` (:func:`bench_segment.bench_composites`)."""
+    seed`` (:func:`bench_composites.bench_composites`)."""
     return {c.index: (c.obj.record.object_id, c.background, c.rgb, c.truth, c.box)
             for c in bench_composites(data, seed, max(wanted) + 1) if c.index in wanted}  # fmt: skip
 

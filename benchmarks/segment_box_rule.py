@@ -26,7 +26,7 @@ from affnerf.model import segmenter as segnet
 from affnerf.predict import segment
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import bench_composites  # noqa: E402
+from bench_composites import bench_composites  # noqa: E402
 
 THRESHOLDS = (0.8, 0.85, 0.9, 0.93, 0.95)
 

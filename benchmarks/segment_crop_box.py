@@ -31,7 +31,8 @@ from affnerf.predict.segment import mask_iou, segment
 from affnerf.predict.shipped import shipped_model
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import bench_composites, replay_args, score_photo  # noqa: E402
+from bench_composites import bench_composites, replay_args  # noqa: E402
+from bench_segment import score_photo  # noqa: E402
 
 KINDS = ("auto mask", "auto mask, true crop", "auto mask grown 2 px", "true mask")
 

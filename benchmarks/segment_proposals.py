@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from bench_segment import BACKGROUNDS, backgrounds, composite
+from bench_composites import BACKGROUNDS, backgrounds, composite
 from scipy import ndimage
 
 from affnerf.bench.environment import describe_machine

@@ -24,7 +24,8 @@ from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_segment import backgrounds, bench_composites, composite, replay_args, score_photo  # noqa: E402
+from bench_composites import backgrounds, bench_composites, composite, replay_args  # noqa: E402
+from bench_segment import score_photo  # noqa: E402
 
 KINDS = ("composite, true mask", "white background, same size", "clean render")
 
