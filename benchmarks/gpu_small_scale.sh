@@ -27,7 +27,7 @@ EVAL_S="${EVAL_S:-110}"         # seconds kept for scoring and packing
 PROBE_STEPS="${PROBE_STEPS:-60}"
 VAL_OBJECTS="${VAL_OBJECTS:-5}" # validation objects per category in val40
 CAL_OBJECTS="${CAL_OBJECTS:-0}" # validation objects to calibrate the mesh level on (0: keep the stored level;
-                                # val40 took 14 s an H100, so 32 likely fits beside it: untimed)
+                                # val40 took 14 s on an H100, so 32 likely fits beside it: untimed)
 TARGETS="${TARGETS:-5}"         # target views per object in val40
 mkdir -p "$W" "$OUT"
 T0=$(date +%s)
