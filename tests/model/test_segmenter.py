@@ -45,6 +45,16 @@ def test_the_mask_keeps_a_faint_thin_part_and_sure_fragments_but_not_unsure_ones
     assert boxed.sum() == 100 + 16 and not boxed[:, 20:].any()
 
 
+def test_the_main_region_is_the_sure_object_not_a_larger_unsure_subject():
+    prob = np.zeros((40, 120), np.float32)
+    prob[5:35, 5:45] = 0.84  # the photo's own subject, 1200 px the segmenter half believes
+    prob[10:30, 80:100] = 0.97  # the object, 400 px it is sure of
+    mask = segnet.probability_mask(prob)
+    assert mask[10:30, 80:100].all() and not mask[:, :60].any()
+    prob[0:40, 0:60] = 0.84  # 2400 px of it: over three times the object's score, it wins again
+    assert segnet.probability_mask(prob)[:, :60].all() and not segnet.probability_mask(prob)[:, 60:].any()
+
+
 def test_save_and_load_give_the_same_probabilities(tmp_path):
     torch.manual_seed(0)
     model = segnet.ObjectSegmenter(TINY).eval()

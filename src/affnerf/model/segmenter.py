@@ -39,10 +39,19 @@ SEGMENTER_THRESHOLD = 0.5
 #: Probability above which a pixel is object when it is connected, through shared edges, to pixels above
 #: :data:`SEGMENTER_THRESHOLD` (hysteresis, as Canny's edges: the faint middle of a thin shaft stays with its handle).
 SEGMENTER_LOW_THRESHOLD = 0.4
-#: Beside the largest region of the mask, other regions are kept where the segmenter is this sure of them on
+#: The mask's main region is the one of largest size × (mean probability) ** this: a region the segmenter is less
+#: sure of must be much larger to win (at 0.84 against 0.97, over three times the size), so the photo's own subject
+#: (a cup, a person) no longer beats a smaller object the segmenter is sure of. Chosen on the composite benchmark's
+#: seed-1 draws (8 to 32 level, 0 to 6 and "surest alone" worse), confirmed on seeds 0 and 2
+#: (benchmarks/results/segmenter_u2netp.md, "Which region").
+SEGMENTER_REGION_SURENESS_POWER = 8
+#: ... among the regions of at least this share of the largest one's size (a sure speck is not the object; 0.1
+#: kept every seed-1 gain, 0.25 lost a pen a fifth of the size of the cup beside it).
+SEGMENTER_MAIN_MIN_SIZE = 0.1
+#: Beside the main region of the mask, other regions are kept where the segmenter is this sure of them on
 #: average (a screwdriver's tip cut off from its handle by a shaft it lost)...
 SEGMENTER_EXTRA_CONFIDENCE = 0.9
-#: ... at least this share of the largest region's size...
+#: ... at least this share of the main region's size...
 SEGMENTER_EXTRA_SIZE = 0.01
 #: ... and within this share of the photo's larger side of it (a thing further away is another thing).
 SEGMENTER_EXTRA_DISTANCE = 0.1
@@ -179,15 +188,18 @@ def object_probability(model: Segmenter, rgb: np.ndarray) -> np.ndarray:
 def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
     """(H, W) bool object mask of the segmenter's (H, W) probability map: pixels above
     :data:`SEGMENTER_THRESHOLD`, with those above :data:`SEGMENTER_LOW_THRESHOLD` joined to them (hysteresis);
-    then, within ``inside`` ((H, W) bool, or everywhere), the largest 8-connected region and any other that the
-    segmenter is on average :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE`
-    of the largest's size and within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on
-    the composite benchmark's seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments").
+    then, within ``inside`` ((H, W) bool, or everywhere), the main 8-connected region (the largest size × mean
+    probability ** :data:`SEGMENTER_REGION_SURENESS_POWER` of those at least :data:`SEGMENTER_MAIN_MIN_SIZE` of the
+    largest's size) and any other that the segmenter is on average
+    :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE` of the main one's size and
+    within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on the composite benchmark's
+    seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region").
 
     Example:
-        >>> p = np.zeros((3, 20)); p[1, :3] = 0.95; p[1, 3] = 0.45; p[1, 5] = 0.95; p[0, 0] = 0.45; p[1, 15] = 0.99
-        >>> probability_mask(p).astype(int)[:2, :8].tolist(), bool(probability_mask(p)[1, 15])
-        ([[1, 0, 0, 0, 0, 0, 0, 0], [1, 1, 1, 1, 0, 1, 0, 0]], False)
+        >>> p = np.zeros((3, 40)); p[1, :12] = 0.95; p[1, 12] = 0.45; p[1, 14] = 0.95; p[0, 0] = 0.45; p[1, 30] = 0.99
+        >>> m = probability_mask(p)
+        >>> m[1, 10:16].astype(int).tolist(), bool(m[0, 0]), bool(m[1, 30])
+        ([1, 1, 1, 0, 1, 0], True, False)
     """
     from scipy import ndimage
     from skimage.filters import apply_hysteresis_threshold
@@ -200,7 +212,8 @@ def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.n
         return found
     index = np.arange(1, count + 1)
     sizes, means = ndimage.sum(found, labels, index), ndimage.mean(prob, labels, index)
-    main = int(np.argmax(sizes))
+    score = np.where(sizes >= SEGMENTER_MAIN_MIN_SIZE * sizes.max(), sizes * means**SEGMENTER_REGION_SURENESS_POWER, -1)
+    main = int(np.argmax(score))
     keep = (means >= SEGMENTER_EXTRA_CONFIDENCE) & (sizes >= SEGMENTER_EXTRA_SIZE * sizes[main])
     keep[main] = False
     if keep.any():
