@@ -30,15 +30,10 @@ PROTOCOLS="${PROTOCOLS:-table2 base stability}"
 STABILITY_OBJECTS="${STABILITY_OBJECTS:-8}"  # test objects per category predicted from 4 input-view sets (8: all)
 UNSEEN="${UNSEEN:-}"
 mkdir -p "$W" "$OUT"
-T0=$(date +%s)
-elapsed() { echo $(($(date +%s) - T0)); }
 
-export PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
-if [ -d .whl ] && ! "$PY" -c "import trimesh, embreex, tyro" 2>/dev/null; then
-    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
-fi
-export PYTHONUNBUFFERED=1 OMP_NUM_THREADS="${OMP_NUM_THREADS:-2}"
-A() { "$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())' "$@"; }
+GPU_THREADS=2
+# shellcheck source=benchmarks/gpu_env.sh
+source benchmarks/gpu_env.sh
 D="${DATA:-$W/data}"
 
 # ev RUN OUT-FOLDER OPTIONS...: one `affnerf eval` on $DEVICE, again on the CPU if that fails

@@ -23,16 +23,9 @@ LOG_EVERY="${LOG_EVERY:-50}"
 SLOT1_END="${SLOT1_END:-560}"     # seconds into the start phase by which its training slot must end
 SLOT2_MIN="${SLOT2_MIN:-6}"       # minutes of training in the finish phase
 mkdir -p "$W" "$OUT"
-T0=$(date +%s)
-elapsed() { echo $(($(date +%s) - T0)); }
 
-if [ -d .whl ] && ! "$PY" -c "import trimesh, embreex, tyro" 2>/dev/null; then
-    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
-fi
-export PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
-export PYTHONUNBUFFERED=1 OMP_NUM_THREADS="${OMP_NUM_THREADS:-4}"
-AFF=("$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())')
-A() { "${AFF[@]}" "$@"; }
+# shellcheck source=benchmarks/gpu_env.sh
+source benchmarks/gpu_env.sh
 D="$W/data"
 CACHE="$W/cache"
 PAPER=(--config paper --val-every 0 --log-every "$LOG_EVERY" --checkpoint-every 1000 --no-progress --device "$DEVICE"

@@ -30,15 +30,9 @@ CAL_OBJECTS="${CAL_OBJECTS:-0}" # validation objects to calibrate the mesh level
                                 # val40 took 14 s on an H100, so 32 likely fits beside it: untimed)
 TARGETS="${TARGETS:-5}"         # target views per object in val40
 mkdir -p "$W" "$OUT"
-T0=$(date +%s)
-elapsed() { echo $(($(date +%s) - T0)); }
 
-if [ -d .whl ] && ! "$PY" -c "import trimesh, embreex, tyro" 2>/dev/null; then
-    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
-fi
-export PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
-export PYTHONUNBUFFERED=1 OMP_NUM_THREADS="${OMP_NUM_THREADS:-4}"
-A() { "$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())' "$@"; }
+# shellcheck source=benchmarks/gpu_env.sh
+source benchmarks/gpu_env.sh
 D="${DATA:-$W/data}"
 CACHE="$W/cache"
 SHIPPED=src/affnerf/weights/affnerf-small.pt
@@ -99,10 +93,10 @@ pack
 left() { echo $((BUDGET - 10 - $(elapsed))); }
 score() {  # score NAME RUN: calibrate a run folder (not the shipped file, calibrated already), then val40
     if [ -d "$2" ] && [ "$CAL_OBJECTS" -gt 0 ]; then
-        timeout "$(left)" "$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())' eval calibrate \
+        timeout "$(left)" "${AFF[@]}" eval calibrate \
             --run "$2" --data "$D" --max-objects "$CAL_OBJECTS" --device "$DEVICE" > "$W/calibrate-$1.log" 2>&1
     fi
-    timeout "$(left)" "$PY" -c 'import sys; from affnerf.cli.main import main; sys.exit(main())' eval --run "$2" \
+    timeout "$(left)" "${AFF[@]}" eval --run "$2" \
         --data "$D" --split val --method affnerf --scale 0.25 --target-views "$TARGETS" --max-objects "$VAL_OBJECTS" \
         --mesh-resolution 96 --device "$DEVICE" --chunk 16384 --out "$W/val40_$1" > "$W/val40-$1.log" 2>&1
 }

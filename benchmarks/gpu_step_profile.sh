@@ -15,18 +15,14 @@ DEVICE="${DEVICE:-cuda}"
 STEPS="${STEPS:-150}"
 OBJECTS="${OBJECTS:-10}"
 mkdir -p "$W" "$OUT"
-if [ -d .whl ] && ! "$PY" -c "import trimesh, embreex, tyro" 2>/dev/null; then
-    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
-fi
-export PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
-export PYTHONUNBUFFERED=1 OMP_NUM_THREADS="${OMP_NUM_THREADS:-4}"
-T0=$(date +%s)
-"$PY" -m affnerf.cli.main data generate --out "$W/data" --objects-per-category "$OBJECTS" --views 30 --workers 16 \
+# shellcheck source=benchmarks/gpu_env.sh
+source benchmarks/gpu_env.sh
+A data generate --out "$W/data" --objects-per-category "$OBJECTS" --views 30 --workers 16 \
     --seed 0 > "$W/data.log" 2>&1 || { tail -5 "$W/data.log"; exit 1; }
 RUN=(--data "$W/data" --config small --objects-per-step 32 --rays-per-step 4096 --val-every 0 --log-every 50
     --checkpoint-every 100000 --no-progress --device "$DEVICE" --cache-dir "$W/cache")
-"$PY" -m affnerf.cli.main train "${RUN[@]}" --out "$W/warm" --steps 20 > "$W/warm.log" 2>&1 || { tail -5 "$W/warm.log"; exit 1; }
-echo "data and caches in $(($(date +%s) - T0)) s" | tee "$OUT/profile.txt"
+A train "${RUN[@]}" --out "$W/warm" --steps 20 > "$W/warm.log" 2>&1 || { tail -5 "$W/warm.log"; exit 1; }
+echo "data and caches in $(elapsed) s" | tee "$OUT/profile.txt"
 "$PY" -m cProfile -o "$W/train.prof" -m affnerf.cli.main train "${RUN[@]}" --out "$W/prof" --steps "$STEPS" \
     >> "$OUT/profile.txt" 2>&1
 tail -n 2 "$W/prof/metrics.jsonl" >> "$OUT/profile.txt"
