@@ -46,7 +46,7 @@ SEGMENTER_LOW_THRESHOLD = 0.4
 #: (benchmarks/results/segmenter_u2netp.md, "Which region").
 SEGMENTER_REGION_SURENESS_POWER = 8
 #: ... among the regions of at least this share of the largest one's size (a sure speck is not the object; 0.1
-#: kept every seed-1 gain, 0.25 lost a pen a fifth of the size of the cup beside it).
+#: kept every seed-1 gain, 0.25 lost a pen less than a quarter of the size of the cup beside it).
 SEGMENTER_MAIN_MIN_SIZE = 0.1
 #: Beside the main region of the mask, other regions are kept where the segmenter is this sure of them on
 #: average (a screwdriver's tip cut off from its handle by a shaft it lost)...
