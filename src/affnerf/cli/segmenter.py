@@ -21,7 +21,7 @@ def train_segmenter(config: Annotated[SegmenterTrainConfig, tyro.conf.arg(name="
     your own object families: `affnerf predict --segmenter OUT` (with --segment auto or segmenter). Writes OUT
     (weights, network shape and the training record with the validation mask IoU, also after every 250 steps). On
     the procedural families, 154 minutes of 2 CPU cores fine-tuning U²-Net-p in three stages gave the segmenter
-    that ships (mean mask IoU 0.81 on unseen photographs, against 0.54 for GrabCut; a U-Net from random weights,
+    that ships (mean mask IoU 0.83 on unseen photographs, against 0.54 for GrabCut; a U-Net from random weights,
     80 minutes: 0.37; benchmarks/results/segmenter_u2netp.md): check yours on your photos before relying on it.
 
     Exit codes: 0 done; 2 bad input (no dataset at DATA, no objects in its train split).
