@@ -18,6 +18,7 @@ EXTRA="${EXTRA:-120}"
 MINUTES="${MINUTES:-40}"
 STEPS="${STEPS:-14000}"  # the schedule's length: about what one core makes in MINUTES beside another run
 LIMIT="$MINUTES"
+export OMP_NUM_THREADS=1  # one thread a run: two runs on two cores (more threads oversubscribe them)
 SHIPPED=src/affnerf/weights/affnerf-small.pt
 STAGE=(--init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$W/cache")
 mkdir -p "$W" "$BIG"
