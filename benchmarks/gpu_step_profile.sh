@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where a training step of the small recipe spends its time on a GPU (issue 12): gpu_small_scale.sh found 8-10 steps
+# Where a training step of the small recipe spends its time on a GPU (issue 12): gpu_small_scale.sh found 10 steps
 # a second per process on an H100 at 32 objects and 4,096 rays a step, with a field of 64 x 4 as with one of
 # 128 x 6, so the step is not bound by the field's arithmetic. This profiles STEPS steps of that setting with
 # cProfile (CUDA is asynchronous: GPU time shows up where Python waits for it, at the first synchronising call) on a
