@@ -264,6 +264,7 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "segmenter_threshold": segnet.SEGMENTER_THRESHOLD,
         "segmenter_low_threshold": segnet.SEGMENTER_LOW_THRESHOLD,
         "segmenter_extra": [segnet.SEGMENTER_EXTRA_CONFIDENCE, segnet.SEGMENTER_EXTRA_SIZE],
+        "segmenter_main_region": [segnet.SEGMENTER_REGION_SURENESS_POWER, segnet.SEGMENTER_MAIN_MIN_SIZE],
         "onnx_threads": salient.SESSION_THREADS,
         "box_padding": BOX_PADDING,
         "tight_box_padding": TIGHT_PADDING,

@@ -16,7 +16,6 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from unittest import mock
 
 import numpy as np
 
@@ -30,15 +29,6 @@ from bench_composites import bench_composites  # noqa: E402
 #: (power, least share of the largest region's size) pairs; at 200 the surest region nearly always wins (one 1 %
 #: surer is preferred to one 7 times its size).
 RULES = [(k, 0.0) for k in (0, 4, 6, 8, 12, 16, 32, 200)] + [(8, f) for f in (0.05, 0.1, 0.25, 0.5)]
-
-
-def rule_mask(prob: np.ndarray, power: float, floor: float) -> np.ndarray:
-    """The shipped mask of ``prob`` with the main-region rule (``power``, ``floor``) in place of the shipped one."""
-    with (
-        mock.patch.object(segnet, "SEGMENTER_REGION_SURENESS_POWER", power),
-        mock.patch.object(segnet, "SEGMENTER_MAIN_MIN_SIZE", floor),
-    ):
-        return segnet.probability_mask(prob)
 
 
 def name(rule: tuple[float, float]) -> str:
@@ -59,7 +49,7 @@ def main() -> None:
         changed = []
         for c in bench_composites(args.data, seed, args.composites):
             prob = segnet.object_probability(model, c.rgb)
-            row = {name(r): round(mask_iou(rule_mask(prob, *r), c.truth), 4) for r in RULES}
+            row = {name(r): round(mask_iou(segnet.probability_mask(prob, None, *r), c.truth), 4) for r in RULES}
             for key, value in row.items():
                 ious[key].append(value)
             if len(set(row.values())) > 1:

@@ -185,7 +185,12 @@ def object_probability(model: Segmenter, rgb: np.ndarray) -> np.ndarray:
     return np.clip(np.asarray(full, np.float32), 0.0, 1.0)
 
 
-def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.ndarray:
+def probability_mask(
+    prob: np.ndarray,
+    inside: np.ndarray | None = None,
+    power: float = SEGMENTER_REGION_SURENESS_POWER,
+    main_min_size: float = SEGMENTER_MAIN_MIN_SIZE,
+) -> np.ndarray:
     """(H, W) bool object mask of the segmenter's (H, W) probability map: pixels above
     :data:`SEGMENTER_THRESHOLD`, with those above :data:`SEGMENTER_LOW_THRESHOLD` joined to them (hysteresis);
     then, within ``inside`` ((H, W) bool, or everywhere), the main 8-connected region (the largest size × mean
@@ -193,7 +198,8 @@ def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.n
     largest's size) and any other that the segmenter is on average
     :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE` of the main one's size and
     within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on the composite benchmark's
-    seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region").
+    seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region");
+    ``power`` and ``main_min_size`` replace the main region's two constants (benchmarks/segment_region_rule.py).
 
     Example:
         >>> p = np.zeros((3, 40)); p[1, :12] = 0.95; p[1, 12] = 0.45; p[1, 14] = 0.95; p[0, 0] = 0.45; p[1, 30] = 0.99
@@ -212,7 +218,7 @@ def probability_mask(prob: np.ndarray, inside: np.ndarray | None = None) -> np.n
         return found
     index = np.arange(1, count + 1)
     sizes, means = ndimage.sum(found, labels, index), ndimage.mean(prob, labels, index)
-    score = np.where(sizes >= SEGMENTER_MAIN_MIN_SIZE * sizes.max(), sizes * means**SEGMENTER_REGION_SURENESS_POWER, -1)
+    score = np.where(sizes >= main_min_size * sizes.max(), sizes * means**power, -1)
     main = int(np.argmax(score))
     keep = (means >= SEGMENTER_EXTRA_CONFIDENCE) & (sizes >= SEGMENTER_EXTRA_SIZE * sizes[main])
     keep[main] = False
