@@ -80,12 +80,10 @@ A train --data "$D" --out "$W/wide" "${WIDE[@]}" --steps "$(cat "$W/steps-wide")
 wait
 echo "training done at $(elapsed) s" | tee -a "$OUT/device.txt"
 tail -n 2 "$W/train-stage.log" "$W/train-wide.log"
-weights() {  # each run's last checkpoint to $OUT (again after calibration, which stores the mesh level in it)
+weights() {  # each run's last checkpoint to $OUT, as the shipped model was exported (again after calibration,
+    # which stores the mesh level in it)
     for r in stage wide; do
-        last=$(ls "$W/$r"/checkpoints/*.pt 2>/dev/null | sort | tail -1)
-        [ -n "$last" ] && "$PY" -c "import sys, torch
-c = torch.load(sys.argv[1], map_location='cpu', weights_only=False)
-torch.save({k: v for k, v in c.items() if k not in ('optimizer', 'rank_states')}, sys.argv[2])" "$last" "$OUT/$r.pt"
+        "$PY" -m affnerf.predict.shipped "$W/$r" "$OUT/$r.pt" || echo "no weights of $r"
     done
 }
 weights
