@@ -65,13 +65,8 @@ class ConditionedNeRFMethod:
         """The occupancy grid of the encoding of ``obj`` from ``inputs`` (kept like the encoding)."""
         encoding = self.encoded(obj, inputs)
         if self._grid is None:
-            self._grid = self.build_grid(encoding)
+            self._grid = self.loaded.model.occupancy(encoding)
         return self._grid
-
-    @torch.no_grad()
-    def build_grid(self, encoding: object) -> OccupancyGrid:
-        """The occupancy grid of an encoding (a method may carve it further)."""
-        return self.loaded.model.occupancy(encoding)
 
     def predict(self, obj: ObjectData, inputs: list[int], targets: TargetSet) -> Prediction:
         encoding = self.encoded(obj, inputs)
