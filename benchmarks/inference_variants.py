@@ -12,6 +12,8 @@ protocol of benchmarks/side_by_side.sh). One variant per process: each patches t
   (IoU of the cells above half the surface density); when the better IoU reaches T, density, affordance logits
   and colour are averaged over each point and its mirror image (the canonical frames put each family's plane of
   symmetry through the origin, conventions §1).
+- ``smooth-S``: the density grid of the labelled mesh blurred by a Gaussian of S millimetres before the level and
+  marching cubes (3D only; the ripples of about a centimetre the meshes show, `results/pe_frequencies.md`).
 
     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/inference_variants.py --data DATA --variant VARIANT \\
         --out W/VARIANT
@@ -34,6 +36,7 @@ from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
 from affnerf.eval.methods import affnerf as method_module
 from affnerf.fileio import write_json_atomic
 from affnerf.model.field import ConditionalField, FieldOutput
+from affnerf.predict import mesh as mesh_module
 from affnerf.predict.mesh import evaluate_grid
 from affnerf.predict.shipped import shipped_model
 
@@ -120,6 +123,18 @@ def patch_mirror(threshold: float, log: list[dict]) -> None:
     method_module.ConditionedNeRFMethod.encoded = choose_plane
 
 
+def patch_smoothing(sigma_m: float) -> None:
+    """Blur every density grid that mesh extraction evaluates by a Gaussian of ``sigma_m`` metres."""
+    from scipy.ndimage import gaussian_filter
+
+    def smoothed(fn, resolution, half_extent, *args, **kwargs):
+        volume = evaluate_grid(fn, resolution, half_extent, *args, **kwargs)
+        spacing = 2.0 * half_extent / (resolution - 1)
+        return gaussian_filter(volume, sigma_m / spacing, mode="constant").astype(np.float32)
+
+    mesh_module.evaluate_grid = smoothed
+
+
 def samples_checkpoint(run: Path, coarse: int, fine: int, folder: Path) -> Path:
     """A copy of the checkpoint with other samples per ray (not architecture: the weights are the same)."""
     data = torch.load(run, map_location="cpu", weights_only=False)
@@ -141,6 +156,8 @@ def run_variant(variant: str, data: Path, run: Path, out: Path) -> dict:
         method_module.dataset_views = multi_margin_views([float(m) for m in variant[6:].split(",")])
     elif variant.startswith("mirror-"):
         patch_mirror(float(variant[7:]), log)
+    elif variant.startswith("smooth-"):
+        patch_smoothing(float(variant[7:]) / 1000.0)
     elif variant != "base":
         raise SystemExit(f"unknown variant {variant!r}")
     args = ["eval", "--run", str(run), "--data", str(data), "--split", "val", "--method", "affnerf", "--scale",
