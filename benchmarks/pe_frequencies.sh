@@ -20,12 +20,4 @@ LIMIT="$MINUTES"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 CACHE="${CACHE:-$W/cache}"
-warm_cache "$CACHE"
-for pe in $PES; do
-    timed_small_run "pe$pe" "$STEPS" --cache-dir "$CACHE" --model.pe-xyz "$pe" &
-done
-wait
-for pe in $PES; do
-    val40 "pe$pe" "$W/pe$pe" &
-done
-wait
+sweep_small_runs pe --model.pe-xyz "$PES"

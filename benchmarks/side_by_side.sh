@@ -43,6 +43,21 @@ json.dump(merged, open(f"{work}/scores.json", "w"), indent=1)
 PY
 }
 
+# sweep_small_runs PREFIX FLAG "VALUES": one timed small run per value, side by side, W/PREFIXVALUE trained with
+# FLAG VALUE for STEPS steps (or LIMIT minutes) on the frame and point cache CACHE, then each scored by val40.
+sweep_small_runs() {
+    local prefix=$1 flag=$2 values=$3 value
+    warm_cache "$CACHE"
+    for value in $values; do
+        timed_small_run "$prefix$value" "$STEPS" --cache-dir "$CACHE" "$flag" "$value" &
+    done
+    wait
+    for value in $values; do
+        val40 "$prefix$value" "$W/$prefix$value" &
+    done
+    wait
+}
+
 # val40 NAME RUN-OR-CHECKPOINT: AFF-NeRF on 40 validation objects of DATA (5 per category, input view 0, 5 target
 # views at 100x75, meshes at 96^3), written to W/val40_NAME.
 val40() {
