@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Fewer positional-encoding frequencies of positions (issue 12; benchmarks/results/pe_frequencies.md). The field
 # reads a point through sines and cosines of 2^k * pi * x, x in metres, k < pe_xyz (10 in both presets, the paper's
-# value): the last octave has a 3.9 mm period, finer than the 4.7 mm cells of the 128^3 meshes. Predicted meshes
+# value): the last octave has a 3.9 mm period, the spacing of the 128^3 meshes. Predicted meshes
 # show ripples of about a centimetre (docs/overview.png, results/shared_3763.png), and a small conditional field
 # asked to reproduce 512 objects through such inputs may fit them by detail that does not carry to new objects
 # (Occupancy Networks, DISN and IF-Net use none; pixelNeRF six). Runs of the small preset from scratch, one core
-# each, side by side, one per value of PES (default "10 7": as shipped, and a 1.6 cm shortest period), each ending
+# each, side by side, one per value of PES (default "10 7": as shipped, and a 3.1 cm shortest period), each ending
 # by its step count (STEPS) or MINUTES, whichever is first; each is evaluated on 40 validation objects (5 per
 # category, 5 target views at 100x75, meshes at 96^3).
 set -euo pipefail
