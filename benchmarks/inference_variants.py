@@ -37,7 +37,7 @@ from affnerf.eval.methods import affnerf as method_module
 from affnerf.fileio import write_json_atomic
 from affnerf.model.field import ConditionalField, FieldOutput
 from affnerf.predict import mesh as mesh_module
-from affnerf.predict.mesh import evaluate_grid
+from affnerf.predict.mesh import evaluate_grid, grid_spacing
 from affnerf.predict.shipped import shipped_model
 
 KEYS = ("mIoU", "PA", "MPA", "mIoU_object", "PSNR", "fscore_1cm", "affordance_miou_3d")
@@ -129,8 +129,8 @@ def patch_smoothing(sigma_m: float) -> None:
 
     def smoothed(fn, resolution, half_extent, *args, **kwargs):
         volume = evaluate_grid(fn, resolution, half_extent, *args, **kwargs)
-        spacing = 2.0 * half_extent / (resolution - 1)
-        return gaussian_filter(volume, sigma_m / spacing, mode="constant").astype(np.float32)
+        sigma = sigma_m / grid_spacing(resolution, half_extent)
+        return gaussian_filter(volume, sigma, mode="constant").astype(np.float32)
 
     mesh_module.evaluate_grid = smoothed
 

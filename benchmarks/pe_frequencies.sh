@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fewer positional-encoding frequencies of positions (issue 12; benchmarks/results/pe_frequencies.md). The field
+# How many positional-encoding frequencies of positions (issue 12; benchmarks/results/pe_frequencies.md). The field
 # reads a point through sines and cosines of 2^k * pi * x, x in metres, k < pe_xyz (10 in both presets, the paper's
 # value): the last octave has a 3.9 mm period, the spacing of the 128^3 meshes. Predicted meshes
 # show ripples of about a centimetre (docs/overview.png, results/shared_3763.png), and a small conditional field

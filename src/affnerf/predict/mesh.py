@@ -29,6 +29,16 @@ def grid_axis(resolution: int, half_extent: float) -> np.ndarray:
     return np.linspace(-half_extent, half_extent, resolution)
 
 
+def grid_spacing(resolution: int, half_extent: float) -> float:
+    """Distance between neighbouring samples of :func:`grid_axis`.
+
+    Example:
+        >>> grid_spacing(5, 1.0)
+        0.5
+    """
+    return 2.0 * half_extent / (resolution - 1)
+
+
 @torch.no_grad()
 def evaluate_grid(
     fn: PointFn,
@@ -205,8 +215,9 @@ def model_surface(
     half = model.config.scene_half_extent
     volume = evaluate_grid(density, resolution, half, occupancy=occupancy)
     if level is None:
-        spacing = 2.0 * half / (resolution - 1)
-        level = object_level(volume, spacing, model.config.surface_density, model.config.surface_optical_depth)
+        level = object_level(
+            volume, grid_spacing(resolution, half), model.config.surface_density, model.config.surface_optical_depth
+        )
     mesh = labelled_mesh_from_grid(volume, labels, level, half)
     confidence = face_confidence(mesh, model.point_probabilities(encoding))
     return replace(mesh, face_props={**mesh.face_props, "confidence": confidence}), float(level)
