@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # The small recipe with a GPU's compute (issue 12), in one command that fits a 10-minute slot of a lent GPU:
 # is the CPU model held back by its training budget, or by its size? Two runs side by side on one GPU for the same
-# wall time, each with 32 objects and 4,096 rays a step (128 rays an object, 4 times the CPU preset's 32):
+# wall time, each with 32 objects and 4,096 rays a step (128 rays an object, 4 times the CPU preset's 32); RUNS
+# names them (default "stage wide"):
 #   stage  a further stage of the shipped weights (its architecture; a fresh Adam, 2e-4 -> 2e-5), as the shipped
 #          model's own second stage, with far more rays;
-#   wide   from scratch (1e-3 -> 2e-5), the small preset with a field of 128 x 6 (colour and affordance heads 64)
-#          instead of 64 x 4: the capacity that did not pay at equal CPU time (results/wide_full_budget.md).
+#   narrow from scratch (1e-3 -> 2e-5), the small preset as it is (field 64 x 4);
+#   wide   from scratch, the small preset with a field of 128 x 6 (colour and affordance heads 64) instead of
+#          64 x 4: the capacity that did not pay at equal CPU time (results/wide_full_budget.md);
+#   wider  from scratch, the paper's field (256 x 8, heads 128) on the small preset's encoders.
 # Then each run, and the shipped weights, are scored on the val40 protocol of side_by_side.sh (40 validation objects, input view 0, 5 targets at 100x75, meshes at 96^3),
 # on the GPU, at the mesh level stored in the weights (CAL_OBJECTS > 0 calibrates each run first; at about 4 s an
 # object that does not fit the slot, so the runs' levels are calibrated afterwards on a CPU). Everything small comes back in $OUT/gpu_small_scale.tar.gz, and each run's last weights as
@@ -29,6 +32,8 @@ VAL_OBJECTS="${VAL_OBJECTS:-5}" # validation objects per category in val40
 CAL_OBJECTS="${CAL_OBJECTS:-0}" # validation objects to calibrate the mesh level on (0: keep the stored level;
                                 # val40 took 14 s on an H100, so 32 likely fits beside it: untimed)
 TARGETS="${TARGETS:-5}"         # target views per object in val40
+RUNS="${RUNS:-stage wide}"      # the runs trained side by side (names above)
+SCORE="${SCORE:-1}"             # 0: no val40 on the GPU (the weights come back to be scored on a CPU)
 mkdir -p "$W" "$OUT"
 
 # shellcheck source=benchmarks/gpu_env.sh
@@ -39,7 +44,22 @@ SHIPPED=src/affnerf/weights/affnerf-small.pt
 COMMON=(--config small --objects-per-step 32 --rays-per-step 4096 --val-every 0 --log-every 20 --checkpoint-every 1000
     --keep-checkpoints 2 --no-progress --device "$DEVICE" --cache-dir "$CACHE")
 STAGE=("${COMMON[@]}" --init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e-5)
+NARROW=("${COMMON[@]}")
 WIDE=("${COMMON[@]}" --model.field-width 128 --model.field-depth 6 --model.color-width 64 --model.affordance-width 64)
+WIDER=("${COMMON[@]}" --model.field-width 256 --model.field-depth 8 --model.color-width 128 --model.affordance-width 128)
+args() {  # args RUN: the run's training arguments, one a line
+    case "$1" in
+        stage) printf '%s\n' "${STAGE[@]}" ;; narrow) printf '%s\n' "${NARROW[@]}" ;;
+        wide) printf '%s\n' "${WIDE[@]}" ;; wider) printf '%s\n' "${WIDER[@]}" ;;
+        *) echo "unknown run $1" >&2; return 1 ;;
+    esac
+}
+for r in $RUNS; do args "$r" > /dev/null || exit 2; done
+train() {  # train RUN OUT [ARGS...]: one run with its arguments and more
+    local run=$1 out=$2; shift 2
+    local -a a; mapfile -t a < <(args "$run")
+    A train --data "$D" --out "$out" "${a[@]}" "$@"
+}
 
 pack() {
     tar -czf "$OUT/gpu_small_scale.tar.gz" -C "$W" --exclude='*/checkpoints' --exclude='*/tb' --exclude='*.npy' \
@@ -63,26 +83,24 @@ for c in screwdriver pen scissors eyeglasses bucket bottle cabinet teapot; do
 done
 wait
 echo "caches at $(elapsed) s" | tee -a "$OUT/device.txt"
-# speed probe, both side by side
-A train --data "$D" --out "$W/probe-stage" "${STAGE[@]}" --steps "$PROBE_STEPS" > "$W/probe-stage.log" 2>&1 &
-A train --data "$D" --out "$W/probe-wide" "${WIDE[@]}" --steps "$PROBE_STEPS" > "$W/probe-wide.log" 2>&1 &
+# speed probe, all side by side
+for r in $RUNS; do train "$r" "$W/probe-$r" --steps "$PROBE_STEPS" > "$W/probe-$r.log" 2>&1 & done
 wait
 MINUTES=$("$PY" -c "print(round(max(0.5, ($BUDGET - $EVAL_S - $(elapsed) - 15) / 60), 2))")
-for r in stage wide; do
+for r in $RUNS; do
     "$PY" -c "import sys; print(max(20, int(float(sys.argv[1]) * 60 * $MINUTES)))" "$(rate "$W/probe-$r")" \
         > "$W/steps-$r" || { tail -5 "$W/probe-$r.log"; exit 1; }
     echo "$r: $(rate "$W/probe-$r") steps/s -> $(cat "$W/steps-$r") steps in $MINUTES min" | tee -a "$OUT/device.txt"
 done
-A train --data "$D" --out "$W/stage" "${STAGE[@]}" --steps "$(cat "$W/steps-stage")" --time-limit "$MINUTES" \
-    > "$W/train-stage.log" 2>&1 &
-A train --data "$D" --out "$W/wide" "${WIDE[@]}" --steps "$(cat "$W/steps-wide")" --time-limit "$MINUTES" \
-    > "$W/train-wide.log" 2>&1 &
+for r in $RUNS; do
+    train "$r" "$W/$r" --steps "$(cat "$W/steps-$r")" --time-limit "$MINUTES" > "$W/train-$r.log" 2>&1 &
+done
 wait
 echo "training done at $(elapsed) s" | tee -a "$OUT/device.txt"
-tail -n 2 "$W/train-stage.log" "$W/train-wide.log"
+for r in $RUNS; do tail -n 2 "$W/train-$r.log"; done
 weights() {  # each run's last checkpoint to $OUT, as the shipped model was exported (again after calibration,
     # which stores the mesh level in it)
-    for r in stage wide; do
+    for r in $RUNS; do
         "$PY" -m affnerf.predict.shipped "$W/$r" "$OUT/$r.pt" || echo "no weights of $r"
     done
 }
@@ -98,11 +116,11 @@ score() {  # score NAME RUN: calibrate a run folder (not the shipped file, calib
         --data "$D" --split val --method affnerf --scale 0.25 --target-views "$TARGETS" --max-objects "$VAL_OBJECTS" \
         --mesh-resolution 96 --device "$DEVICE" --chunk 16384 --out "$W/val40_$1" > "$W/val40-$1.log" 2>&1
 }
-score stage "$W/stage" &
-score wide "$W/wide" &
+[ "$SCORE" = 1 ] || exit 0
+for r in $RUNS; do score "$r" "$W/$r" & done
 score shipped "$SHIPPED" &
 wait
 echo "scoring done at $(elapsed) s" | tee -a "$OUT/device.txt"
 weights
 pack
-for r in shipped stage wide; do echo "== $r"; cat "$W/val40_$r/table2.md" 2>/dev/null | head -20; done
+for r in shipped $RUNS; do echo "== $r"; cat "$W/val40_$r/table2.md" 2>/dev/null | head -20; done
