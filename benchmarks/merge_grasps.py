@@ -15,7 +15,8 @@ import json
 import shutil
 from pathlib import Path
 
-from affnerf.eval.grasp_table import summarise, table3_markdown
+from affnerf.eval.grasp_intervals import table3_summary
+from affnerf.eval.grasp_table import table3_markdown
 from affnerf.eval.protocol import merge_settings
 from affnerf.fileio import write_json_atomic
 
@@ -29,7 +30,7 @@ def main() -> None:
     ids = [o["object_id"] for o in objects]
     if len(set(ids)) != len(ids):
         raise SystemExit("merge_grasps: the parts share objects; merge runs of disjoint categories")
-    summary = summarise(objects)
+    summary = table3_summary(objects)
     context = merge_settings([json.loads((p / "grasp_metrics.json").read_text())["settings"] for p in args.parts])
     args.out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(args.out / "grasp_objects.json", objects)

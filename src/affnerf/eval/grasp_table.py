@@ -157,8 +157,34 @@ def _left_out_note(summary: dict[str, Any], key: str) -> list[str]:
     return [f"Averages leave out the categories where one row of the same mesh has no grasp ({'; '.join(notes)}).", ""]
 
 
+_SHORT = {"on_part_share": "on the true task part", "lift_success": "lift", "disturb_success": "lift + disturb"}
+
+
+def _points(value: float | None) -> str:
+    return "–" if value is None else f"{100 * value:+.0f}"
+
+
+def intervals_markdown(intervals: dict[str, Any]) -> list[str]:
+    """Lines of a table of :func:`affnerf.eval.grasp_intervals.restriction_intervals`: each restricted row's
+    difference from the whole surface of its mesh, in percentage points, with its interval."""
+    keys = list(next(iter(intervals["rows"].values())))
+    lines = [
+        f"**Restricted minus whole surface of the same mesh** (percentage points; in brackets the"
+        f" {100 * intervals['level']:.0f} % bootstrap interval over objects, resampled within each category,"
+        f" {intervals['draws']} draws)",
+        "",
+        "| | " + " | ".join(_SHORT[k] for k in keys) + " |",
+        "|" + " --- |" * (len(keys) + 1),
+    ]
+    for cond, cells in intervals["rows"].items():
+        text = [f"{_points(c['difference'])} [{_points(c['low'])}, {_points(c['high'])}]" for c in cells.values()]
+        lines.append(f"| {LABELS[cond]} | " + " | ".join(text) + " |")
+    return [*lines, ""]
+
+
 def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
-    """Markdown of Table 3: one table per metric, rows = conditions, columns = categories and their average."""
+    """Markdown of Table 3: one table per metric, rows = conditions, columns = categories and their average; then,
+    when the summary has them, the restricted rows' differences with their intervals."""
     cats = sorted(summary["categories"])
     header = ["| | " + " | ".join(cats) + " | Average |", "|" + " --- |" * (len(cats) + 2)]
     lines = [f"# Grasps on {context.get('split', 'test')} objects: the true or predicted mesh, whole or task part", ""]
@@ -169,6 +195,8 @@ def table3_markdown(summary: dict[str, Any], context: dict[str, Any]) -> str:
             cells = [summary["categories"][c][cond][key] for c in cats] + [summary["mean"][cond][key]]
             lines.append(f"| {LABELS[cond]} | " + " | ".join(_fmt(key, v) for v in cells) + " |")
         lines += ["", *_left_out_note(summary, key)]
+    if summary.get("intervals"):
+        lines += intervals_markdown(summary["intervals"])
     lines += ["**Objects where planning found no grasp** (last column: all objects; `grasp_objects.json` says why)"]
     lines += ["", *header]
     for cond in CONDITIONS:

@@ -21,6 +21,7 @@ import numpy as np
 
 from affnerf.data.dataset import Dataset, ObjectData
 from affnerf.errors import AffnerfError
+from affnerf.eval.grasp_intervals import table3_summary
 from affnerf.eval.grasp_table import CONDITIONS, mesh_of, summarise, table3_markdown, task_affordance, whole_of
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
@@ -336,7 +337,7 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
         else evaluate_object(loaded, ds.load_object(e), config)
         for e in entries
     ]
-    summary = summarise(objects)
+    summary = table3_summary(objects)
     context = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
     write_json_atomic(out / "grasp_objects.json", objects)
     write_json_atomic(out / "grasp_metrics.json", {**summary, "settings": context})
