@@ -47,7 +47,9 @@ def grasp(config: Annotated[GraspEvalConfig, tyro.conf.arg(name="")]) -> None:
     error); score every grasp on the true mesh at the object's metric size (canonical / scale, or
     --object-size): mean Ferrari-Canny epsilon and its ratio to the whole surface of the same mesh, the share of
     grasps with both contacts on the true task part, the lift success rate in physics and, beside it,
-    lift-and-disturb success. Writes OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
+    lift-and-disturb success; and each restricted row minus the whole surface of its mesh, with a 95 % bootstrap
+    interval over objects (is the restriction better, or could other objects say otherwise?). Writes
+    OUT/table3.md, OUT/grasp_metrics.json and OUT/grasp_objects.json.
     """
     from affnerf.eval.grasp_table import METRICS
     from affnerf.eval.grasps import run_grasp_eval
