@@ -47,17 +47,12 @@ STAGE=("${COMMON[@]}" --init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e
 NARROW=("${COMMON[@]}")
 WIDE=("${COMMON[@]}" --model.field-width 128 --model.field-depth 6 --model.color-width 64 --model.affordance-width 64)
 WIDER=("${COMMON[@]}" --model.field-width 256 --model.field-depth 8 --model.color-width 128 --model.affordance-width 128)
-args() {  # args RUN: the run's training arguments, one a line
-    case "$1" in
-        stage) printf '%s\n' "${STAGE[@]}" ;; narrow) printf '%s\n' "${NARROW[@]}" ;;
-        wide) printf '%s\n' "${WIDE[@]}" ;; wider) printf '%s\n' "${WIDER[@]}" ;;
-        *) echo "unknown run $1" >&2; return 1 ;;
-    esac
-}
-for r in $RUNS; do args "$r" > /dev/null || exit 2; done
+for r in $RUNS; do  # each run's arguments are the array named as the run in capitals
+    case "$r" in stage | narrow | wide | wider) ;; *) echo "unknown run $r (stage, narrow, wide, wider)" >&2; exit 2 ;; esac
+done
 train() {  # train RUN OUT [ARGS...]: one run with its arguments and more
     local run=$1 out=$2; shift 2
-    local -a a; mapfile -t a < <(args "$run")
+    local -n a="${run^^}"
     A train --data "$D" --out "$out" "${a[@]}" "$@"
 }
 
