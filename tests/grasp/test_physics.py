@@ -49,6 +49,14 @@ def test_lift_test_is_deterministic():
     assert lift_test(BOX, pose, 0.04) == lift_test(BOX, pose, 0.04)
 
 
+def test_a_lift_test_prints_nothing_and_leaves_standard_output_working(capfd):
+    print("before", flush=True)
+    assert lift_test(BOX, grasp_pose(np.zeros(3), X, Y), 0.04).success
+    print("after", flush=True)
+    out, _ = capfd.readouterr()
+    assert out == "before\nafter\n"  # pybullet's "argv[0]=" of each connection is not in a long run's log
+
+
 def test_closing_on_empty_space_beside_the_box_fails():
     result = lift_test(BOX, grasp_pose(np.array([0.1, 0.0, 0.0]), X, Y), 0.04)
     assert not result.success and not result.held

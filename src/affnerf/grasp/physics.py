@@ -24,9 +24,12 @@ ramp (``changeConstraint``). Bullet multiplies two bodies' lateral frictions, so
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import os
+import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -264,7 +267,8 @@ def simulate(
     pose = _checked_pose(pose, width, gripper)
     parts = convex_parts(mesh)
     opening = min(width + config.open_margin, gripper.max_opening)
-    client = BulletClient(connection_mode=pybullet.DIRECT)
+    with _c_stdout_silenced():  # pybullet prints "argv[0]=" from C on every connection
+        client = BulletClient(connection_mode=pybullet.DIRECT)
     try:
         client.setPhysicsEngineParameter(
             fixedTimeStep=config.time_step,
@@ -282,6 +286,22 @@ def simulate(
         return result, after(rig, pose[:3, 3] + np.array([0.0, 0.0, config.lift_height]))
     finally:
         client.disconnect()
+
+
+@contextlib.contextmanager
+def _c_stdout_silenced() -> Iterator[None]:
+    """Route what C code prints to the process's standard output (file descriptor 1) to the null device for the
+    block; Python's ``sys.stdout`` is flushed first and C's buffer before it is restored, so nothing crosses over."""
+    sys.stdout.flush()
+    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        ctypes.CDLL(None).fflush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
 
 
 @dataclass
