@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
+from affnerf.environment import describe_machine
 from affnerf.eval.surface import sample_seed, score_mesh, true_samples
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import load_model

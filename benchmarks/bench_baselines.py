@@ -28,11 +28,11 @@ from typing import Any
 
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.bench.timing import timed
 from affnerf.bench.training import step_throughput
 from affnerf.data.dataset import Dataset
 from affnerf.data.generate import GenerateConfig, generate_dataset
+from affnerf.environment import describe_machine
 from affnerf.model.inputs import dataset_views
 from affnerf.model.registry import build_model
 from affnerf.model.views import render_view

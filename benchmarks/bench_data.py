@@ -12,7 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from affnerf.bench.data_throughput import DataBenchConfig, measure_generation
-from affnerf.bench.environment import describe_machine
+from affnerf.environment import describe_machine
 
 
 def main() -> None:

@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import ObjectData
+from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
 from affnerf.predict import salient, segment
 

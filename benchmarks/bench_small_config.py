@@ -18,9 +18,9 @@ from dataclasses import replace
 from pathlib import Path
 
 from affnerf.bench.curves import CURVE_PROTOCOL, measure_curve, step_seconds
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
 from affnerf.data.generate import GenerateConfig, generate_dataset
+from affnerf.environment import describe_machine
 from affnerf.eval.methods.constant import ConstantMethod
 from affnerf.eval.protocol import evaluate
 from affnerf.train.cache import load_frames

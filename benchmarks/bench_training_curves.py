@@ -21,8 +21,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from affnerf.bench.curves import measure_curve, step_seconds
-from affnerf.bench.environment import describe_machine
 from affnerf.bench.training import reference_variant
+from affnerf.environment import describe_machine
 from affnerf.train.cache import load_frames
 from affnerf.train.config import SMALL
 from affnerf.train.trainer import train

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
+from affnerf.environment import describe_machine
 from affnerf.fileio import write_json_atomic
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import load_model

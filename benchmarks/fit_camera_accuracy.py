@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, interleave_categories
+from affnerf.environment import describe_machine
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.fileio import write_json_atomic
 from affnerf.model.inputs import dataset_views

@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.cli.main import main as affnerf_main
 from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
+from affnerf.environment import describe_machine
 from affnerf.eval.methods import affnerf as method_module
 from affnerf.fileio import write_json_atomic
 from affnerf.model.field import ConditionalField, FieldOutput

@@ -33,8 +33,8 @@ import torch
 import trimesh
 from scipy import sparse
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
+from affnerf.environment import describe_machine
 from affnerf.eval.calibrate import calibration_objects, input_views
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.surface import sample_seed, score_mesh, true_samples

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
+from affnerf.environment import describe_machine
 from affnerf.eval.calibrate import (
     CalibrateConfig,
     calibration_grids,

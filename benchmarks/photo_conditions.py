@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 from PIL import Image, ImageFilter
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset
+from affnerf.environment import describe_machine
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.eval.surface import sample_seed, true_samples
 from affnerf.predict.predictor import Predictor

@@ -23,8 +23,8 @@ import numpy as np
 import torch
 from ablation_ladder import run_parser, warm_cache  # benchmarks/ is the script's folder, first on sys.path
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.environment import describe_machine
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import load_model
 from affnerf.train.cache import cached_points

@@ -24,7 +24,7 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
-from affnerf.bench.environment import describe_machine
+from affnerf.environment import describe_machine
 from affnerf.eval.surface import true_samples
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.segment import mask_iou, segment

@@ -33,10 +33,10 @@ import torch
 from bench_composites import BACKGROUNDS, backgrounds, composite
 from scipy import ndimage
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data import composite as synth
 from affnerf.data.crop import crop_object, object_bbox
 from affnerf.data.dataset import Dataset
+from affnerf.environment import describe_machine
 from affnerf.predict import salient, segment
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model

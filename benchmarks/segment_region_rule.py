@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.bench.environment import describe_machine
+from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
 from affnerf.predict.segment import mask_iou, resolve_segmenter
 

@@ -39,11 +39,11 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.cameras import Intrinsics, look_at
 from affnerf.data.importer import ImportConfig, _object_rng, import_partnet
 from affnerf.data.partnet import load_partnet_object
 from affnerf.data.raycast import FrameCaster
+from affnerf.environment import describe_machine
 from affnerf.eval.surface import mesh_samples, sample_seed, score_mesh
 from affnerf.meshio import LabelledMesh, read_labelled_ply
 from affnerf.metrics.segmentation import confusion_matrix, mean_iou, object_only

@@ -20,9 +20,9 @@ from pathlib import Path
 
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.bench.timing import peak_memory
 from affnerf.demo.runner import repository_examples
+from affnerf.environment import describe_machine
 from affnerf.predict.outputs import PredictConfig, write_prediction
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model

@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
 from affnerf.data.raycast import FrameCaster
 from affnerf.data.writer import surface_from_record
+from affnerf.environment import describe_machine
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.methods.affnerf_fit import FittedAffNeRFMethod
 from affnerf.eval.methods.retrieval import RetrievalMethod

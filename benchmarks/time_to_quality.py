@@ -20,8 +20,8 @@ from typing import Any
 
 from ablation_ladder import curve
 
-from affnerf.bench.environment import describe_machine
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
+from affnerf.environment import describe_machine
 from affnerf.predict.loading import load_model
 from affnerf.train.validate import validate
 

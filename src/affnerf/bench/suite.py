@@ -12,12 +12,12 @@ import numpy as np
 import torch
 
 from affnerf.bench.data_throughput import DataBenchConfig, measure_generation
-from affnerf.bench.environment import describe_machine
 from affnerf.bench.inference import measure_inference
 from affnerf.bench.timing import peak_memory
 from affnerf.bench.training import compare_training
 from affnerf.data.dataset import Dataset
 from affnerf.data.generate import GenerateConfig, generate_dataset
+from affnerf.environment import describe_machine
 from affnerf.model.inputs import dataset_views
 from affnerf.predict.loading import load_model
 from affnerf.predict.predictor import pick_device
