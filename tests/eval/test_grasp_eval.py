@@ -38,6 +38,9 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
     metrics = json.loads((out / "grasp_metrics.json").read_text())
     assert set(metrics["mean"]) == set(CONDITIONS)
     assert metrics["categories"]["screwdriver"]["true_whole"]["epsilon_ratio"] == pytest.approx(1.0)
+    machine = metrics["settings"]["machine"]  # what a rerun needs to give the same bits
+    assert machine["threads_per_object"] == 1 and machine["packages"]["pybullet"] and machine["torch"]
+    assert metrics["settings"]["workers"] == "2"
     table = (out / "table3.md").read_text()
     assert all(f"| {LABELS[c]} |" in table for c in CONDITIONS)
     assert "L1 grasp wrench space" in table and "μ = 0.5" in table and "soft-finger" in table
@@ -46,6 +49,11 @@ def test_grasp_eval_writes_the_2x2_table3(trained_runs, train_dataset, tmp_path)
     for category in ("bottle", "screwdriver"):  # five panels: a title strip and three 200 px views each
         picture = np.asarray(Image.open(out / f"grasps_{category}.png"))
         assert picture.shape == (5 * (18 + 200), 600, 3) and picture.std() > 10
+    # the default two workers each took one object; one worker taking both, one after the other, gives the same
+    # numbers (each object on one thread, nothing carried from one object to the next)
+    args[args.index(str(out))] = str(tmp_path / "one_worker")
+    assert main([*args, "--workers", "1", "--no-pictures"]) == 0
+    assert json.loads((tmp_path / "one_worker" / "grasp_objects.json").read_text()) == objects
 
 
 def test_the_true_mesh_takes_the_predicted_fields_labels(trained_runs, train_dataset):

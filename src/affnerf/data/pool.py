@@ -1,10 +1,16 @@
-"""Worker processes for dataset generation, each pinned to its own core from the start.
+"""Worker processes, each pinned to its own core and single-threaded from the start: dataset generation renders
+objects in them, and Table 3's grasp evaluation (:mod:`affnerf.eval.grasps`) evaluates objects in them.
 
 Embree's thread pool (TBB) is sized by the cores a process may use when the library loads, and trimesh loads
 it on import. Two workers free to use both cores each start a pool of two threads that fight over them
 (measured: fewer frames per second than one process alone); a worker confined to one core from birth gets a
 pool of one thread and the workers add up. A child inherits its parent's core mask when it is created, so the
 parent narrows its own mask to one core while it starts each worker and restores it afterwards.
+
+The OpenMP, BLAS and torch thread pools of a worker are sized to one thread too (:data:`SINGLE_THREAD`, set in
+the child's environment before it imports anything): a floating-point sum split over threads is added in an
+order that depends on their number, so a job's numbers would otherwise depend on the machine's core count (the
+fit of a predicted model, measured: 1 and 2 threads give other grasps on every predicted mesh of Table 3).
 """
 
 from __future__ import annotations
@@ -16,6 +22,9 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 _POLL_SECONDS = 0.2
+
+#: Environment of every worker: its thread pools hold one thread.
+SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
 
 
 #: What a worker runs for each job: ``work(job, on_frame)`` returns the job's result (picklable); ``on_frame()`` is
@@ -37,9 +46,12 @@ def _worker_loop(work: Work, tasks: Any, results: Any, progress: Any) -> None:
 
 
 def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
-    """Start ``count`` worker processes, the i-th confined to the i-th core (round robin)."""
+    """Start ``count`` single-threaded worker processes (:data:`SINGLE_THREAD`), the i-th confined to the i-th
+    core (round robin)."""
     original = os.sched_getaffinity(0)
     cores = sorted(original)
+    saved = {name: os.environ.get(name) for name in SINGLE_THREAD}
+    os.environ.update(SINGLE_THREAD)
     procs = []
     try:
         for i in range(count):
@@ -50,6 +62,11 @@ def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
             procs.append(proc)
     finally:
         os.sched_setaffinity(0, original)
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
     return procs
 
 
@@ -80,7 +97,7 @@ def run_jobs(work: Work, jobs: Sequence[Any], workers: int, on_frames: Callable[
             except queue_module.Empty:
                 on_frames(_drain(progress))
                 if not any(p.is_alive() for p in procs):
-                    raise RuntimeError("every generation worker stopped before finishing its objects") from None
+                    raise RuntimeError("every worker stopped before finishing its jobs") from None
                 continue
             on_frames(_drain(progress))
             if status == "error":

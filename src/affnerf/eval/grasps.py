@@ -12,14 +12,19 @@ brought to metric size by the same factor as the true mesh. The table itself is 
 
 from __future__ import annotations
 
+import functools
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from tqdm import tqdm
 
-from affnerf.data.dataset import Dataset, ObjectData
+from affnerf.data.dataset import Dataset, IndexEntry, ObjectData
+from affnerf.data.pool import run_jobs
+from affnerf.environment import describe_machine
 from affnerf.errors import AffnerfError
 from affnerf.eval.grasp_intervals import table3_summary
 from affnerf.eval.grasp_table import CONDITIONS, mesh_of, summarise, table3_markdown, task_affordance, whole_of
@@ -94,6 +99,8 @@ class GraspEvalConfig:
             8-13 points, benchmarks/results/grasp_confidence.md).
         rank: what orders every condition's grasps (:class:`~affnerf.grasp.planner.PlanConfig`): ``epsilon``
             (Ferrari-Canny) or ``hold`` (the weight carried while the object turns about the closing axis).
+        workers: objects evaluated at once, each in a process of its own on one core and one thread
+            (:mod:`affnerf.data.pool`), so that the numbers do not depend on this or on the machine's core count.
     """
 
     run: Path
@@ -119,6 +126,7 @@ class GraspEvalConfig:
     predicted_clearance: float = PREDICTED_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
     rank: Literal["epsilon", "hold"] = RANK
+    workers: int = 2
 
 
 @dataclass(frozen=True)
@@ -307,38 +315,61 @@ def evaluate_object(
     return result
 
 
-def _picture_path(out: Path, category: str, config: GraspEvalConfig) -> Path | None:
-    return out / f"grasps_{category}.png" if config.pictures else None
+@functools.cache
+def _worker_inputs(run: Path, data: Path, device: str) -> tuple[LoadedModel, Dataset]:
+    """The model and dataset of a worker process, loaded once per process."""
+    return load_model(run, pick_device(device)), Dataset.open(data)
 
 
-def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
-    """Evaluate every object; write ``grasp_objects.json``, ``grasp_metrics.json``, ``table3.md`` and (with
-    ``pictures``) ``grasps_<category>.png`` of each category's first object."""
-    started = time.perf_counter()
-    ds = Dataset.open(config.data)
-    loaded = load_model(config.run, pick_device(config.device))
-    if loaded.model.needs_input_pose:
-        raise AffnerfError(
-            f"{loaded.path}: grasp evaluation predicts affordance models from one unposed image: "
-            f"use an AFF-NeRF (or pose-aware) run, not {loaded.model.config.kind}"
-        )
+def _evaluate_job(config: GraspEvalConfig, job: tuple[IndexEntry, Path | None], done: Callable[[], None]) -> dict:
+    """One object of :func:`run_grasp_eval` in a worker process (:func:`affnerf.data.pool.run_jobs`): ``job`` is
+    its index entry and the path of its category's picture (None: no picture)."""
+    entry, picture = job
+    loaded, ds = _worker_inputs(Path(config.run), Path(config.data), config.device)
+    result = evaluate_object(loaded, ds.load_object(entry), config, picture)
+    done()
+    return result
+
+
+def grasp_entries(ds: Dataset, config: GraspEvalConfig) -> list[IndexEntry]:
+    """The objects Table 3 grasps: ``config.split``'s objects of ``config.categories``, in that order, at most
+    ``config.max_objects`` per category."""
     cats = [c.strip() for c in config.categories.split(",") if c.strip()]
     entries = ds.objects(config.split, cats)
     if config.max_objects:
         entries = [e for c in cats for e in [x for x in entries if x.category == c][: config.max_objects]]
     if not entries:
         raise AffnerfError(f"{ds.root / 'dataset.json'}: no {config.split} objects of {', '.join(cats)}")
+    return entries
+
+
+def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
+    """Evaluate every object (``config.workers`` at once); write ``grasp_objects.json``, ``grasp_metrics.json``,
+    ``table3.md`` and (with ``pictures``) ``grasps_<category>.png`` of each category's first object."""
+    started = time.perf_counter()
+    if config.workers < 1:
+        raise AffnerfError("--workers must be at least 1")
+    loaded = load_model(config.run, pick_device(config.device))
+    if loaded.model.needs_input_pose:
+        raise AffnerfError(
+            f"{loaded.path}: grasp evaluation predicts affordance models from one unposed image: "
+            f"use an AFF-NeRF (or pose-aware) run, not {loaded.model.config.kind}"
+        )
+    entries = grasp_entries(Dataset.open(config.data), config)
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
     firsts = {e.category: e.id for e in reversed(entries)}  # the first object of each category
-    objects = [
-        evaluate_object(loaded, ds.load_object(e), config, _picture_path(out, e.category, config))
-        if firsts[e.category] == e.id
-        else evaluate_object(loaded, ds.load_object(e), config)
-        for e in entries
+    pictures = [
+        out / f"grasps_{e.category}.png" if config.pictures and firsts[e.category] == e.id else None for e in entries
     ]
+    with tqdm(total=len(entries), desc="grasp objects", unit="obj") as bar:
+        jobs = list(zip(entries, pictures, strict=True))
+        done = run_jobs(functools.partial(_evaluate_job, config), jobs, min(config.workers, len(jobs)), bar.update)
+        by_id = {o["object_id"]: o for o in done}
+    objects = [by_id[e.id] for e in entries]
     summary = table3_summary(objects)
     context = {**{k: str(v) for k, v in asdict(config).items()}, "seconds": round(time.perf_counter() - started, 1)}
+    context["machine"] = describe_machine() | {"threads_per_object": 1}
     write_json_atomic(out / "grasp_objects.json", objects)
     write_json_atomic(out / "grasp_metrics.json", {**summary, "settings": context})
     (out / "table3.md").write_text(table3_markdown(summary, context))
