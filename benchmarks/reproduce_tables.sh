@@ -142,8 +142,8 @@ done
 #    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
 #    default 1 cm part margin (chosen on validation objects by
 #    benchmarks/grasp_margin.py), the predicted part planned first where the prediction before the fit agrees;
-#    about 15 minutes on one core (committed run: the two halves of the categories side by side, 8 min 48 s,
-#    merged by benchmarks/merge_grasps.py; every object is evaluated on its own, so it equals this one command)
+#    its objects in two single-threaded worker processes (--workers 2, the default), 10 min 22 s on 2 cores; the
+#    numbers do not depend on the worker or core count (README, Table 3, "Reruns")
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
 # 8. collect
