@@ -362,7 +362,7 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
     pictures = [
         out / f"grasps_{e.category}.png" if config.pictures and firsts[e.category] == e.id else None for e in entries
     ]
-    with tqdm(total=len(entries), desc="grasp objects", unit="obj") as bar:
+    with tqdm(total=len(entries), desc="grasp objects", unit="obj", disable=None) as bar:
         jobs = list(zip(entries, pictures, strict=True))
         done = run_jobs(functools.partial(_evaluate_job, config), jobs, min(config.workers, len(jobs)), bar.update)
         by_id = {o["object_id"]: o for o in done}
