@@ -349,6 +349,7 @@ def run_grasp_eval(config: GraspEvalConfig) -> dict[str, Any]:
     started = time.perf_counter()
     if config.workers < 1:
         raise AffnerfError("--workers must be at least 1")
+    # the workers load their own model; this one refuses a wrong run in one line before any of them starts
     loaded = load_model(config.run, pick_device(config.device))
     if loaded.model.needs_input_pose:
         raise AffnerfError(
