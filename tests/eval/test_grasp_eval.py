@@ -197,3 +197,11 @@ def test_predicted_models_keep_their_own_width_clearance_and_no_grasp_names_it(t
     assert _plan(obj, true, ParallelJawGripper(), "transforms.json scale")[0]
     grasps, why = _plan(obj, predicted, ParallelJawGripper(), "transforms.json scale")
     assert grasps == [] and "0.080 m opening (less 0.02 m clearance)" in why
+
+
+def test_no_workers_is_one_line_and_nothing_is_written(trained_runs, train_dataset, tmp_path, capsys):
+    out = tmp_path / "grasps"
+    args = ["eval", "grasp", "--run", str(trained_runs["affnerf"]), "--data", str(train_dataset), "--out", str(out)]
+    assert main([*args, "--workers", "0"]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == ["affnerf: error: --workers must be at least 1"]
+    assert not out.exists()
