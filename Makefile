@@ -4,6 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TORCH_PIN := torch==2.13.0
+# the versions the committed results were measured with; `make install LOCK=` takes the newest instead
+LOCK ?= requirements-lock.txt
+CONSTRAINTS := $(if $(LOCK),-c $(LOCK))
 DEMO_OUT ?= demo_out
 
 .PHONY: install test lint format demo clean
@@ -11,11 +14,11 @@ DEMO_OUT ?= demo_out
 install: $(STAMP)
 
 # torch is installed first with its exact pin: a bare `torch` requirement would pull the CUDA build.
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet $(TORCH_PIN)
-	$(BIN)/pip install --quiet -e ".[dev,segment]"
+	$(BIN)/pip install --quiet $(TORCH_PIN) $(CONSTRAINTS)
+	$(BIN)/pip install --quiet -e ".[dev,segment]" $(CONSTRAINTS)
 	touch $(STAMP)
 
 test: install lint
