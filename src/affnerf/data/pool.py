@@ -47,8 +47,9 @@ def _worker_loop(work: Work, tasks: Any, results: Any, progress: Any) -> None:
 
 def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
     """Start ``count`` single-threaded worker processes (:data:`SINGLE_THREAD`), the i-th confined to the i-th
-    core (round robin)."""
-    original = os.sched_getaffinity(0)
+    core (round robin) where the system can confine a process to a core (Linux; elsewhere, e.g. macOS, they are
+    single-threaded but not pinned)."""
+    original = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else set()
     cores = sorted(original)
     saved = {name: os.environ.get(name) for name in SINGLE_THREAD}
     os.environ.update(SINGLE_THREAD)
@@ -61,7 +62,8 @@ def _start_pinned(ctx: Any, count: int, args: tuple) -> list[Any]:
             proc.start()
             procs.append(proc)
     finally:
-        os.sched_setaffinity(0, original)
+        if original:
+            os.sched_setaffinity(0, original)
         for name, value in saved.items():
             if value is None:
                 os.environ.pop(name, None)
