@@ -1,5 +1,6 @@
-"""Worker processes, each pinned to its own core and single-threaded from the start: dataset generation renders
-objects in them, and Table 3's grasp evaluation (:mod:`affnerf.eval.grasps`) evaluates objects in them.
+"""Worker processes, each single-threaded and (on Linux) pinned to its own core from the start: dataset
+generation renders objects in them, and Table 3's grasp evaluation (:mod:`affnerf.eval.grasps`) evaluates objects
+in them.
 
 Embree's thread pool (TBB) is sized by the cores a process may use when the library loads, and trimesh loads
 it on import. Two workers free to use both cores each start a pool of two threads that fight over them
