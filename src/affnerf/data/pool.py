@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 _POLL_SECONDS = 0.2
+_EXIT_SECONDS = 30.0  #: how long a worker with no jobs left may take to exit before it is stopped
 
 #: Environment of every worker: its thread pools hold one thread.
 SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
@@ -107,6 +108,8 @@ def run_jobs(work: Work, jobs: Sequence[Any], workers: int, on_frames: Callable[
                 raise value
             remaining -= 1
             yield value
+        for proc in procs:  # each exits after its None, its progress written out first: the last frames count too
+            proc.join(timeout=_EXIT_SECONDS)
         on_frames(_drain(progress))
     finally:
         for proc in procs:
