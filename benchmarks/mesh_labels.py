@@ -40,9 +40,8 @@ from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.surface import sample_seed, score_mesh, true_samples
 from affnerf.meshio import LabelledMesh, majority_face_labels
 from affnerf.predict.invert import point_labels
-from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model
-from affnerf.predict.mesh import evaluate_grid, marching_cubes
+from affnerf.predict.mesh import evaluate_grid, marching_cubes, model_level
 
 
 def neighbour_mean_operator(faces: np.ndarray, count: int) -> sparse.csr_matrix:
@@ -141,8 +140,7 @@ def score_object(method, obj, args, depths, smooth) -> dict[str, float | None]:
     density, _ = model.point_fields(encoding)
     half = model.config.scene_half_extent
     volume = evaluate_grid(density, args.resolution, half, occupancy=grid)
-    spacing = 2.0 * half / (args.resolution - 1)
-    level = object_level(volume, spacing, model.config.surface_density, model.config.surface_optical_depth)
+    level = model_level(model, volume)
     vertices, faces = marching_cubes(volume, level, half)
     truth, seed = true_samples(obj, 0), sample_seed(0, obj.record.object_id)
     if not len(faces):

@@ -29,10 +29,9 @@ from affnerf.environment import describe_machine
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, choose_views
 from affnerf.eval.surface import mesh_samples, sample_seed, score_mesh, true_samples
-from affnerf.predict.level import object_level
 from affnerf.predict.loading import load_model
-from affnerf.predict.mesh import evaluate_grid, grid_spacing, labelled_mesh_from_grid
-from affnerf.vocab import AFFORDANCE_CLASSES
+from affnerf.predict.mesh import evaluate_grid, labelled_mesh_from_grid, model_level
+from affnerf.vocab import affordance_id
 
 #: The parts a gripper holds, whose level is lowered.
 HELD = ("grasp", "pull")
@@ -42,12 +41,11 @@ def factor_meshes(model, encoding, resolution: int, factors: list[float]) -> dic
     """The labelled mesh of one encoded object for each factor (1 = the mesh ``affnerf eval`` makes)."""
     density, labels = model.point_fields(encoding)
     probabilities = model.point_probabilities(encoding)
-    held = [AFFORDANCE_CLASSES.index(name) - 1 for name in HELD]  # object classes start at 1
+    held = [affordance_id(name) - 1 for name in HELD]  # columns of the object classes, which start at 1
     half = model.config.scene_half_extent
     volume = evaluate_grid(density, resolution, half)
     p_held = evaluate_grid(lambda x: probabilities(x)[:, held].sum(-1), resolution, half)
-    config = model.config
-    level = object_level(volume, grid_spacing(resolution, half), config.surface_density, config.surface_optical_depth)
+    level = model_level(model, volume)
     return {f: labelled_mesh_from_grid(volume * (1.0 + (1.0 / f - 1.0) * p_held), labels, level, half) for f in factors}
 
 

@@ -192,6 +192,15 @@ def extract_labelled_mesh(
     return labelled_mesh_from_grid(volume, labels, level, half_extent, chunk)
 
 
+def model_level(model: ConditionedNeRF, volume: np.ndarray) -> float:
+    """The density level of one object's mesh from its (R, R, R) density grid over the model's scene cube
+    (:func:`evaluate_grid`): the model's ``surface_density``, lowered for a diffuse object
+    (:func:`affnerf.predict.level.object_level` with the model's ``surface_optical_depth``)."""
+    config = model.config
+    spacing = grid_spacing(volume.shape[0], config.scene_half_extent)
+    return object_level(volume, spacing, config.surface_density, config.surface_optical_depth)
+
+
 def model_surface(
     model: ConditionedNeRF,
     encoding: object,
@@ -215,9 +224,7 @@ def model_surface(
     half = model.config.scene_half_extent
     volume = evaluate_grid(density, resolution, half, occupancy=occupancy)
     if level is None:
-        level = object_level(
-            volume, grid_spacing(resolution, half), model.config.surface_density, model.config.surface_optical_depth
-        )
+        level = model_level(model, volume)
     mesh = labelled_mesh_from_grid(volume, labels, level, half)
     confidence = face_confidence(mesh, model.point_probabilities(encoding))
     return replace(mesh, face_props={**mesh.face_props, "confidence": confidence}), float(level)
