@@ -60,10 +60,10 @@ sweep_small_runs() {
 }
 
 # val40 NAME RUN-OR-CHECKPOINT: AFF-NeRF on 40 validation objects of DATA (5 per category, input view 0, 5 target
-# views at 100x75, meshes at 96^3), written to W/val40_NAME.
+# views at 100x75, or VAL40_SCALE of the dataset's resolution; meshes at 96^3), written to W/val40_NAME.
 val40() {
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
+    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale "${VAL40_SCALE:-0.25}" \
+        --target-views 5 --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }
 
 # test64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 test objects of DATA (8 per category), to W/test64_NAME:

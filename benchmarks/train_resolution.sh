@@ -22,12 +22,6 @@ mkdir -p "$W"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 
-# val40 at the test protocol's resolution (200x150), to W/val40h_NAME
-val40_half() {
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.5 --target-views 5 \
-        --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40h_$1"
-}
-
 if [ "${SKIP_TRAINING:-0}" != 1 ]; then
     W="$W/warm-a" warm_cache "$W/cache_quarter" --image-scale 0.25 &
     W="$W/warm-b" warm_cache "$W/cache_half" --image-scale 0.5 &
@@ -46,11 +40,11 @@ for name in plain half; do
 done
 wait
 for name in plain half; do
-    val40_half "$name" "$W/$name" > "$W/val40h_$name.log" 2>&1 &
+    VAL40_SCALE=0.5 val40 "${name}_200x150" "$W/$name" > "$W/val40_${name}_200x150.log" 2>&1 &
 done
 wait
 for name in plain half; do
     echo "== $name"
     sed -n 5,9p "$W/val40_$name/table2.md"
-    sed -n 5,9p "$W/val40h_$name/table2.md"
+    sed -n 5,9p "$W/val40_${name}_200x150/table2.md"
 done
