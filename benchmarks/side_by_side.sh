@@ -1,6 +1,6 @@
 # Sourced by the benchmarks that train two `small` runs side by side, one core each, for the same minutes
 # (capacity.sh, encoder_size.sh, encoder_width.sh, further_stage.sh, triplane.sh, batch_shape.sh, pe_frequencies.sh,
-# seed_spread.sh), and score them.
+# seed_spread.sh, more_objects.sh, train_resolution.sh and the fine_tune_*.sh stages), and score them.
 # Needs DATA, W and LIMIT (a run's time limit in minutes).
 # shellcheck shell=bash
 
