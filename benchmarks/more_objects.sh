@@ -7,7 +7,8 @@
 # (32 validation objects) and scored on val40 (side_by_side.sh).
 #   FROM=shipped (default): a further stage of the shipped weights (a fresh Adam, 2e-4 -> 2e-5, as
 #                           further_stage.sh; results/more_objects.md)
-#   FROM=scratch:           from the first step with the preset's schedule (1e-3 -> 2e-5; results/more_objects_scratch.md)
+#   FROM=scratch:           from the first step with the preset's schedule (1e-3 -> 2e-5;
+#                           results/more_objects_scratch.md)
 #
 #   DATA=/tmp/w/data WORK=/tmp/mo [FROM=scratch] benchmarks/more_objects.sh
 set -euo pipefail
