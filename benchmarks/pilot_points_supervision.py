@@ -43,7 +43,7 @@ def volume_iou(model: Any, obj: ObjectData, config: TrainConfig, cache: Path) ->
     crops, intrinsics, poses = dataset_views(obj, [0], model.config.encoder_resolution)
     encoding = model.encode_views(crops, intrinsics, poses)
     xyz = torch.from_numpy(np.array(points.points[:n]))
-    density, _ = model.point_geometry(encoding, torch.zeros(n, dtype=torch.long), xyz)[-1]
+    density = model.point_geometry(encoding, torch.zeros(n, dtype=torch.long), xyz)[-1].density
     pred = (density >= model.config.surface_density).numpy()
     truth = np.asarray(points.occupancy[:n]) > 0
     return float((pred & truth).sum() / max((pred | truth).sum(), 1))

@@ -88,7 +88,8 @@ def test_the_planes_are_decoded_once_per_encoding_until_the_weights_change(monke
 def test_gradients_reach_the_generator_and_the_encoder_through_the_planes():
     model = tiny_triplane()
     codes = model.encode(torch.rand(2, 3, 32, 32))
-    ((density, _),) = model.point_geometry(codes, torch.tensor([0, 1, 1]), torch.rand(3, 3) * 0.2 - 0.1)
+    (field,) = model.point_geometry(codes, torch.tensor([0, 1, 1]), torch.rand(3, 3) * 0.2 - 0.1)
+    density = field.density
     density.sum().backward()
     assert float(model.planes.head.weight.grad.abs().sum()) > 0
     assert float(model.shape_encoder.head.weight.grad.abs().sum()) > 0

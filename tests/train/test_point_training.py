@@ -49,6 +49,21 @@ def test_points_are_logged_and_the_occupancy_loss_falls(tiny_train_config, train
     assert "points" in ckpt["rank_states"][0] and ckpt["train_config"]["points_weight"] == 1.0
 
 
+def test_a_signed_distance_field_logs_its_distance_loss_and_learns_it(tiny_train_config):
+    config = tiny_train_config(steps=30, checkpoint_every=30, points_weight=1.0, points_per_object=512)
+    config = replace(config, model=replace(config.model, geometry="sdf"), optim=replace(config.optim, lr=3e-3))
+    train(config)
+    rows = _metrics(config.out)
+    assert all({"loss/occupancy", "loss/point_distance"} <= set(r) for r in rows)
+    d0, d1 = (
+        np.mean([r["loss/point_distance"] for r in rows[:5]]),
+        np.mean([r["loss/point_distance"] for r in rows[-5:]]),
+    )
+    assert d1 < 0.7 * d0, (d0, d1)
+    ckpt = torch.load(config.out / "checkpoints" / "step_00000030.pt", weights_only=False)
+    assert any(key.endswith("log_beta") for key in ckpt["model"])
+
+
 def test_interrupted_and_resumed_run_with_points_ends_with_the_same_weights(tiny_train_config, tmp_path):
     straight = tiny_train_config(out=tmp_path / "straight", points_weight=0.5, points_per_object=256)
     a, b = straight_and_resumed_weights(straight, stop_at=10)

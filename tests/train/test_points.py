@@ -10,7 +10,14 @@ from affnerf.errors import AffnerfError
 from affnerf.meshio import LabelledMesh, write_labelled_ply
 from affnerf.train import cache as cache_module
 from affnerf.train.cache import cached_points
-from affnerf.train.points import LABEL_BAND, inside_mesh, make_point_set, part_face_weights, split_counts
+from affnerf.train.points import (
+    DISTANCE_TRUNCATION,
+    LABEL_BAND,
+    inside_mesh,
+    make_point_set,
+    part_face_weights,
+    split_counts,
+)
 
 SIGMAS = (0.005, 0.02)
 
@@ -41,6 +48,19 @@ def test_box_points_are_inside_exactly_where_the_box_is_and_take_the_nearest_fac
     assert (ps.labels[top_inside] == 2).all() and (ps.labels[top_outside] == 2).all()
     assert (ps.labels[bottom] == 1).all() and (ps.labels[far] == 0).all()
     assert (ps.labels[ps.occupancy == 1] > 0).all()  # every inside point has a target
+
+
+def test_box_signed_distances_match_the_box_within_the_sample_spacing_and_stop_at_the_truncation():
+    ps = make_point_set(_box(), 0.25, SIGMAS, seed=2, total=12000)
+    p = np.asarray(ps.points, np.float64)
+    outside = np.linalg.norm(np.maximum(np.abs(p) - 0.1, 0.0), axis=1)
+    true = np.where(outside > 0, outside, np.abs(p).max(axis=1) - 0.1)  # the box's signed distance
+    got = np.asarray(ps.distance, np.float64)
+    assert ps.distance.dtype == np.float16 and np.abs(got).max() <= DISTANCE_TRUNCATION + 1e-4
+    clipped = np.clip(true, -DISTANCE_TRUNCATION, DISTANCE_TRUNCATION)
+    assert np.abs(got - clipped).max() < 0.003  # surface samples about 1 mm apart on a 0.2 m box
+    np.testing.assert_array_equal(got < 0, ps.occupancy == 1)
+    assert (np.abs(true) > DISTANCE_TRUNCATION).sum() > 500  # far points are there and hold +-the truncation
 
 
 def test_sphere_inside_fraction_and_surface_band():

@@ -10,7 +10,7 @@ import torch
 from torch import nn
 
 from affnerf.model.config import POINTS_PER_CHUNK, ModelConfig
-from affnerf.model.field import ConditionalField
+from affnerf.model.field import ConditionalField, PointGeometry
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.rendering.grid import OccupancyGrid, build_grid
 
@@ -118,10 +118,9 @@ class ConditionedNeRF(nn.Module, ABC):
         encoding = self.encode_views(images, intrinsics, poses)
         return self.render_rays(encoding, ray_object, origins, dirs, background, perturb, generator)
 
-    def point_geometry(
-        self, encoding: Any, point_object: torch.Tensor, points: torch.Tensor
-    ) -> list[tuple[torch.Tensor, torch.Tensor]]:
-        """Density and affordance logits of every field at points of several encoded objects (3D supervision).
+    def point_geometry(self, encoding: Any, point_object: torch.Tensor, points: torch.Tensor) -> list[PointGeometry]:
+        """Density, affordance logits (and a signed-distance field's distance) of every field at points of several
+        encoded objects (3D supervision).
 
         Args:
             encoding: what :meth:`encode_views` returned for B objects.
@@ -129,12 +128,13 @@ class ConditionedNeRF(nn.Module, ABC):
             points: (P, 3) canonical positions.
 
         Returns:
-            One (P,) density and (P, C - 1) logits pair per field: the coarse one, then the fine one if any.
+            One :class:`~affnerf.model.field.PointGeometry` ((P,) density, (P, C - 1) logits, (P,) distance or None)
+            per field: the coarse one, then the fine one if any.
         """
         rays = torch.arange(len(points), device=points.device)
         trunk_in = self.condition(encoding, point_object)(points, rays)[0]
         fields = [self.coarse] if self.fine is None else [self.coarse, self.fine]
-        return [f.geometry(points, trunk_in) for f in fields]
+        return [f.supervised(points, trunk_in) for f in fields]
 
     def _point_condition(self, encoding: Any, index: int) -> Any:
         """A callable (N, 3) points -> (the field used for meshes, the points on the model's device, their

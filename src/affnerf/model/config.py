@@ -58,6 +58,11 @@ class ModelConfig:
             (AFF-NeRF only, beyond the paper) decodes the shape code once per object into three axis-aligned
             feature planes over the scene cube, and each point's features read from them join PE(position) and the
             code (:mod:`affnerf.model.triplane`).
+        geometry: what the field's density head gives: ``density`` (a softplus of it is the density, the paper) or
+            ``sdf`` (beyond the paper: a signed distance whose density is VolSDF's Laplace CDF with a learnt scale,
+            :func:`affnerf.model.field.laplace_density`; with 3D supervision it is also trained towards each point's
+            truncated distance to the true surface, ``TrainConfig.point_distance_weight``), so free space near a
+            thin part or inside a hollow object carries how far the surface is, not only that it is outside.
         plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
         plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
@@ -84,6 +89,7 @@ class ModelConfig:
     surface_optical_depth: float = 0.0
     occupancy_density: float = 5.0
     conditioning: Literal["concat", "film", "triplane"] = "concat"
+    geometry: Literal["density", "sdf"] = "density"
     plane_resolution: int = 64
     plane_channels: int = 16
 

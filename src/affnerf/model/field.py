@@ -7,8 +7,10 @@ head does), so affordance is a property of the point, not of the viewpoint.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import torch
 from torch import nn
@@ -84,6 +86,27 @@ def per_object(
     return out
 
 
+#: A signed-distance field starts this far outside every point (metres), so a fresh field is nearly empty.
+SDF_START = 0.02
+#: Starting value of a signed-distance field's Laplace scale beta (metres); it is learnt.
+SDF_BETA_INIT = 0.01
+#: Beta never goes below this (metres): at 1 mm an object's inside reaches a density of 1,000 per metre.
+SDF_BETA_MIN = 0.001
+
+
+def laplace_density(distance: torch.Tensor, beta: torch.Tensor | float) -> torch.Tensor:
+    """VolSDF's density of a signed distance: Psi_beta(-d) / beta, Psi_beta the CDF of a zero-mean Laplace
+    distribution of scale beta. (N,) distances (metres, negative inside) -> (N,) densities (per metre): 0.5 / beta
+    on the surface, rising to 1 / beta inside and falling as exp(-d / beta) outside.
+
+    Example:
+        >>> [round(v, 3) for v in laplace_density(torch.tensor([-1.0, 0.0, 0.01, 1.0]), 0.01).tolist()]
+        [100.0, 50.0, 18.394, 0.0]
+    """
+    half = 0.5 * torch.exp(-distance.abs() / beta)
+    return torch.where(distance > 0, half, 1.0 - half) / beta
+
+
 @dataclass(frozen=True)
 class FieldOutput:
     """Field values at sample points.
@@ -98,6 +121,19 @@ class FieldOutput:
     sigma: torch.Tensor
     rgb: torch.Tensor
     logits: torch.Tensor
+
+
+class PointGeometry(NamedTuple):
+    """A field's geometry at supervision points.
+
+    Attributes:
+        density: (N,) density; logits: (N, C - 1) affordance logits; distance: (N,) signed distance (metres) of a
+            signed-distance field, else None.
+    """
+
+    density: torch.Tensor
+    logits: torch.Tensor
+    distance: torch.Tensor | None = None
 
 
 class ConditionalField(nn.Module):
@@ -116,6 +152,9 @@ class ConditionalField(nn.Module):
         film: also modulate every trunk layer by the code (FiLM: ``relu(W h * (1 + gamma) + beta)``, gamma and beta
             linear in the code, as Occupancy Networks' conditional-normalisation decoder); the modulation starts
             at zero, so a fresh FiLM field computes what the concatenating one does.
+        sdf: the density head gives a signed distance d (metres, negative inside; starting at :data:`SDF_START`
+            everywhere) and the density is :func:`laplace_density` of it with a learnt scale beta (VolSDF); False:
+            the density is a softplus of the head (the paper).
     """
 
     def __init__(
@@ -130,6 +169,7 @@ class ConditionalField(nn.Module):
         pe_dir: int = 4,
         color_code_dim: int | None = None,
         film: bool = False,
+        sdf: bool = False,
     ) -> None:
         super().__init__()
         color_code_dim = code_dim if color_code_dim is None else color_code_dim
@@ -148,6 +188,11 @@ class ConditionalField(nn.Module):
             nn.init.zeros_(self.film.weight)
             nn.init.zeros_(self.film.bias)
         self.density = nn.Linear(width, 1)
+        self.log_beta: nn.Parameter | None = None
+        if sdf:
+            self.log_beta = nn.Parameter(torch.tensor(math.log(SDF_BETA_INIT)))
+            nn.init.zeros_(self.density.weight)
+            nn.init.zeros_(self.density.bias)
         self.feature = nn.Linear(width, width)
         self.affordance = nn.Sequential(
             nn.Linear(width, affordance_width), nn.ReLU(), nn.Linear(affordance_width, num_classes - 1)
@@ -179,9 +224,21 @@ class ConditionalField(nn.Module):
             h = torch.relu(h)
         return h
 
+    def distance_from(self, h: torch.Tensor) -> torch.Tensor | None:
+        """(N,) signed distance (metres) from trunk features, or None when the field is not a signed-distance one."""
+        return None if self.log_beta is None else self.density(h)[..., 0] + SDF_START
+
+    def beta(self) -> torch.Tensor | None:
+        """The Laplace scale of a signed-distance field (0-d, metres), or None."""
+        return None if self.log_beta is None else self.log_beta.exp().clamp(min=SDF_BETA_MIN)
+
     def density_from(self, h: torch.Tensor) -> torch.Tensor:
-        """(N,) non-negative density from trunk features (softplus, shifted so a fresh field starts nearly empty)."""
-        return nn.functional.softplus(self.density(h)[..., 0] - 1.0)
+        """(N,) non-negative density from trunk features: a softplus of the head, shifted so a fresh field starts
+        nearly empty, or :func:`laplace_density` of the signed distance."""
+        distance, beta = self.distance_from(h), self.beta()
+        if distance is None or beta is None:
+            return nn.functional.softplus(self.density(h)[..., 0] - 1.0)
+        return laplace_density(distance, beta)
 
     def forward(self, points: torch.Tensor, dirs: torch.Tensor, shape_code: Code, appearance_code: Code) -> FieldOutput:
         """Evaluate the field.
@@ -207,3 +264,8 @@ class ConditionalField(nn.Module):
         """(N,) density and (N, C - 1) affordance logits at points (no colour), for labelling meshes."""
         h = self.trunk(points, shape_code)
         return self.density_from(h), self.affordance(self.feature(h))
+
+    def supervised(self, points: torch.Tensor, shape_code: Code) -> PointGeometry:
+        """What 3D supervision compares with its targets at (N, 3) points (:class:`PointGeometry`)."""
+        h = self.trunk(points, shape_code)
+        return PointGeometry(self.density_from(h), self.affordance(self.feature(h)), self.distance_from(h))

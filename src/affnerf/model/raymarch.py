@@ -104,6 +104,7 @@ class FieldRenderer(nn.Module):
                 config.pe_dir,
                 color_code_dim=color_cond_dim,
                 film=config.conditioning == "film",
+                sdf=config.geometry == "sdf",
             )
 
         self.coarse = field()

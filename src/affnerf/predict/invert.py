@@ -274,7 +274,7 @@ def search_cameras(
 def point_labels(model: ConditionedNeRF, codes: Codes, points: torch.Tensor) -> torch.Tensor:
     """(P, C - 1) object-class logits of the encoded object at (P, 3) points (the fine field when there is one)."""
     obj = torch.zeros(len(points), dtype=torch.long, device=points.device)
-    return model.point_geometry(codes, obj, points)[-1][1]
+    return model.point_geometry(codes, obj, points)[-1].logits
 
 
 def draw_rays(n: int, count: int, generator: torch.Generator) -> torch.Tensor:

@@ -6,9 +6,9 @@ For each object a folder holds ``rgb.npy`` (N, H, W, 3), ``labels.npy`` (N, H, W
 between ``fg_offsets.npy[i]`` and ``[i + 1]``) and ``meta.json`` (poses, intrinsics, background, and a hash of the
 source ``transforms.json``, so a regenerated object is decoded again). With 3D supervision on, a folder
 ``<id>.points`` beside it holds the object's :class:`~affnerf.train.points.PointSet` (``points.npy`` (N, 3) float32,
-``occupancy.npy`` (N,) uint8, ``point_labels.npy`` (N,) uint8) and a ``meta.json`` whose signature hashes the
-source ``mesh.ply`` and the sampling settings. Folders are written under a temporary name and renamed, so a crash
-never leaves a half cache that looks complete.
+``occupancy.npy`` (N,) uint8, ``point_labels.npy`` (N,) uint8, ``point_distance.npy`` (N,) float16) and a
+``meta.json`` whose signature hashes the source ``mesh.ply`` and the sampling settings. Folders are written under a
+temporary name and renamed, so a crash never leaves a half cache that looks complete.
 """
 
 from __future__ import annotations
@@ -203,7 +203,7 @@ def cached_frames(obj: ObjectData, cache_dir: Path, scale: float, crop_size: int
 
 
 #: Bumped when point sets are made differently, so older ones are rebuilt.
-POINTS_VERSION = 2
+POINTS_VERSION = 3
 
 
 def _points_signature(
@@ -224,13 +224,14 @@ def _write_points(
     np.save(tmp / "points.npy", points.points)
     np.save(tmp / "occupancy.npy", points.occupancy)
     np.save(tmp / "point_labels.npy", points.labels)
+    np.save(tmp / "point_distance.npy", points.distance)
     signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance)
     (tmp / "meta.json").write_text(json.dumps({"signature": signature, "seed": seed}))
 
 
 def load_points(folder: Path) -> PointSet:
     """Open a point folder written by :func:`cached_points` (memory-mapped, read-only)."""
-    names = ("points.npy", "occupancy.npy", "point_labels.npy")
+    names = ("points.npy", "occupancy.npy", "point_labels.npy", "point_distance.npy")
     return PointSet(*(np.load(folder / name, mmap_mode="r") for name in names))
 
 

@@ -76,6 +76,10 @@ class TrainConfig:
             ``points_weight`` throughout. Beyond the paper, for a heavy 3D term early or late in a stage.
         points_per_object: supervision points drawn per object and step from its cached point set.
         point_affordance_weight: weight of the points' affordance cross-entropy relative to their occupancy BCE.
+        point_distance_weight: with a signed-distance field (``--model.geometry sdf``), weight of the points'
+            L1 between the field's distance and the true one, both clamped to the truncation
+            (:data:`affnerf.train.points.DISTANCE_TRUNCATION`) and divided by it, relative to their occupancy BCE;
+            ignored by density fields.
         point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set.
         point_sigma_far: noise sigma (m) of the second half (a quarter of each set is uniform over the cube).
         point_part_balance: how the near-surface points are spread over the object's affordance parts: 0 by area
@@ -133,6 +137,7 @@ class TrainConfig:
     points_weight_final: float = -1.0
     points_per_object: int = 1024
     point_affordance_weight: float = 1.0
+    point_distance_weight: float = 1.0
     point_sigma_near: float = 0.005
     point_sigma_far: float = 0.02
     point_part_balance: float = 0.0

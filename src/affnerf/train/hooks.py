@@ -23,7 +23,8 @@ from affnerf.train.logger import MetricsLogger
 from affnerf.train.validate import validate
 
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
-#: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``; with
+#: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``, and for
+#: a signed-distance field ``loss/point_distance``; with
 #: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``, weighted) and
 #: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``).
@@ -70,6 +71,7 @@ class LogScalars:
     OPTIONAL = (
         "loss/occupancy",
         "loss/point_affordance",
+        "loss/point_distance",
         "loss/mask",
         "loss/depth",
         "loss/termination",

@@ -10,7 +10,9 @@ from dataclasses import dataclass
 
 import torch
 
+from affnerf.model.field import PointGeometry
 from affnerf.model.raymarch import RayOutputs
+from affnerf.train.sampler import PointBatch
 
 
 def class_weights(counts: torch.Tensor, power: float) -> torch.Tensor:
@@ -198,38 +200,68 @@ def point_affordance_ce(
     return torch.nn.functional.cross_entropy(logits[keep], labels[keep] - 1, weight=weight)
 
 
+def truncated_distance_l1(distance: torch.Tensor, target: torch.Tensor, truncation: float) -> torch.Tensor:
+    """Mean |clamp(d) - clamp(d*)| / truncation of (P,) predicted and true signed distances, both clamped to
+    +-``truncation`` (DeepSDF's clamped L1): a point farther out than the truncation only asks the field to say
+    so, and the loss is in units of the truncation.
+
+    Example:
+        >>> round(truncated_distance_l1(torch.tensor([0.01, 0.2, -0.02]), torch.tensor([0.0, 0.05, -0.01]),
+        ...                             0.05).item(), 4)
+        0.1333
+    """
+    d = distance.clamp(-truncation, truncation)
+    return (d - target.to(d.dtype).clamp(-truncation, truncation)).abs().mean() / truncation
+
+
 @dataclass
 class PointTerms:
     """The 3D supervision and its parts (scalars), each summed over the fields (coarse and fine).
 
     Attributes:
-        total: points_weight * (occupancy + point_affordance_weight * affordance).
-        occupancy: occupancy BCE of each field, summed; affordance: the points' affordance CE, summed.
-        occupancy_last, affordance_last: the finest field's terms (logged, like ``loss/mse``).
+        total: points_weight * (occupancy + point_affordance_weight * affordance + point_distance_weight *
+            distance).
+        occupancy: occupancy BCE of each field, summed; affordance: the points' affordance CE, summed; distance:
+            the truncated distance L1 of each signed-distance field, summed (0 without one).
+        occupancy_last, affordance_last, distance_last: the finest field's terms (logged, like ``loss/mse``).
     """
 
     total: torch.Tensor
     occupancy: torch.Tensor
     affordance: torch.Tensor
+    distance: torch.Tensor
     occupancy_last: torch.Tensor
     affordance_last: torch.Tensor
+    distance_last: torch.Tensor
 
 
-def point_loss(
-    fields: list[tuple[torch.Tensor, torch.Tensor]],
-    occupancy: torch.Tensor,
-    labels: torch.Tensor,
-    slab: float,
-    weight: float,
-    affordance_weight: float,
-    class_weight: torch.Tensor | None = None,
-) -> PointTerms:
-    """3D supervision of each field's (P,) density and (P, C - 1) logits against (P,) occupancy and labels (the
-    affordance CE weighted by the (C,) class weights when given)."""
-    occ = [occupancy_bce(density, occupancy, slab) for density, _ in fields]
-    ce = [point_affordance_ce(logits, labels, class_weight) for _, logits in fields]
-    occ_sum, ce_sum = torch.stack(occ).sum(), torch.stack(ce).sum()
-    return PointTerms(weight * (occ_sum + affordance_weight * ce_sum), occ_sum, ce_sum, occ[-1], ce[-1])
+@dataclass(frozen=True)
+class PointWeights:
+    """Weights and constants of :func:`point_loss`: the term's weight mu, the affordance CE's and the distance
+    L1's relative to the occupancy BCE, the occupancy slab (m), the distance truncation (m) and optional (C,)
+    class weights of the CE."""
+
+    weight: float
+    affordance: float
+    distance: float
+    slab: float
+    truncation: float
+    class_weight: torch.Tensor | None = None
+
+
+def point_loss(fields: list[PointGeometry], targets: PointBatch, w: PointWeights) -> PointTerms:
+    """3D supervision of each field's (P,) density, (P, C - 1) logits and, for a signed-distance field, (P,)
+    distance against the targets of the step's points (occupancy, labels, truncated signed distance)."""
+    occ = [occupancy_bce(f.density, targets.occupancy, w.slab) for f in fields]
+    ce = [point_affordance_ce(f.logits, targets.labels, w.class_weight) for f in fields]
+    zero = occ[-1] * 0.0
+    dist = [
+        zero if f.distance is None else truncated_distance_l1(f.distance, targets.distance, w.truncation)
+        for f in fields
+    ]
+    occ_sum, ce_sum, dist_sum = torch.stack(occ).sum(), torch.stack(ce).sum(), torch.stack(dist).sum()
+    total = w.weight * (occ_sum + w.affordance * ce_sum + w.distance * dist_sum)
+    return PointTerms(total, occ_sum, ce_sum, dist_sum, occ[-1], ce[-1], dist[-1])
 
 
 def code_consistency(first: torch.Tensor, second: torch.Tensor, eps: float = 1e-8) -> torch.Tensor:

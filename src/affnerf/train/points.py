@@ -5,7 +5,9 @@ rest near the surface (area-weighted surface samples moved by Gaussian noise of 
 
 - an **occupancy** target (1 inside the object), and
 - an **affordance** target: the label of the nearest face for points inside or within :data:`LABEL_BAND` of the
-  surface, 0 (no target; the field never predicts background) for the rest of free space.
+  surface, 0 (no target; the field never predicts background) for the rest of free space, and
+- a **signed distance** target: the distance to the surface, negative inside, truncated at :data:`DISTANCE_TRUNCATION`
+  (DeepSDF's clamp; read only by fields whose geometry is a signed distance, ``--model.geometry sdf``).
 
 Inside or outside (:func:`inside_mesh`): rays are cast from each point in :data:`RAY_DIRECTIONS` (5 fixed, not
 axis-aligned), and the majority of the 5 answers is kept, so a ray that slips through a crack between faces, hits
@@ -44,6 +46,8 @@ SURFACE_SAMPLES = 200_000
 DEEP_STRIDE = 8
 #: Points outside the object farther than this from its surface (metres) get no affordance target.
 LABEL_BAND = 0.01
+#: Signed distances are kept up to this magnitude (metres); points farther from the surface hold +-this value.
+DISTANCE_TRUNCATION = 0.05
 
 
 def _directions() -> np.ndarray:
@@ -63,11 +67,14 @@ class PointSet:
         points: (N, 3) float32 canonical positions inside the scene cube.
         occupancy: (N,) uint8, 1 inside the object.
         labels: (N,) uint8 affordance id of the nearest face; 0 = no affordance target.
+        distance: (N,) float16 signed distance to the surface in metres (negative inside), clamped to
+            +-:data:`DISTANCE_TRUNCATION`.
     """
 
     points: np.ndarray
     occupancy: np.ndarray
     labels: np.ndarray
+    distance: np.ndarray
 
     def __len__(self) -> int:
         return len(self.points)
@@ -150,29 +157,51 @@ def inside_mesh(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
     return votes * 2 > len(RAY_DIRECTIONS)
 
 
+def surface_samples(mesh: trimesh.Trimesh, seed: int) -> tuple[cKDTree, np.ndarray]:
+    """A k-d tree over :data:`SURFACE_SAMPLES` area-weighted surface samples of ``mesh`` and the (S,) face of each
+    sample: the samples stand for the faces in nearest-face and distance queries."""
+    samples, faces = trimesh.sample.sample_surface(mesh, SURFACE_SAMPLES, seed=seed)
+    return cKDTree(samples), np.asarray(faces)
+
+
 def nearest_labels(
-    mesh: trimesh.Trimesh, face_labels: np.ndarray, points: np.ndarray, inside: np.ndarray, seed: int
+    tree: cKDTree, sample_faces: np.ndarray, face_labels: np.ndarray, points: np.ndarray, inside: np.ndarray
 ) -> np.ndarray:
     """(N,) uint8 label of the face nearest to each point that is ``inside`` or within :data:`LABEL_BAND` of the
     surface, 0 elsewhere.
 
     Args:
-        mesh: the object's mesh; face_labels: (F,) its faces' affordance ids; points: (N, 3); inside: (N,) bool;
-        seed: seed of the surface samples standing for the faces.
+        tree, sample_faces: :func:`surface_samples` of the mesh; face_labels: (F,) its faces' affordance ids;
+        points: (N, 3); inside: (N,) bool.
     """
-    samples, faces = trimesh.sample.sample_surface(mesh, SURFACE_SAMPLES, seed=seed)
-    tree = cKDTree(samples)
     dist, index = tree.query(points, distance_upper_bound=LABEL_BAND)
     near = np.isfinite(dist)
     labels = np.zeros(len(points), np.uint8)
-    labels[near] = face_labels[faces[index[near]]]
+    labels[near] = face_labels[sample_faces[index[near]]]
     deep = inside & ~near  # inside, but farther from the surface than the band: no early exit
     if deep.any():
         # Deep inside a round part, every surface sample is nearly equidistant and an exact k-d tree query visits
         # most of them; every DEEP_STRIDE-th sample answers which part a deep point belongs to ~10x faster.
-        coarse = cKDTree(samples[::DEEP_STRIDE])
-        labels[deep] = face_labels[faces[::DEEP_STRIDE][coarse.query(points[deep])[1]]]
+        coarse = cKDTree(tree.data[::DEEP_STRIDE])
+        labels[deep] = face_labels[sample_faces[::DEEP_STRIDE][coarse.query(points[deep])[1]]]
     return labels
+
+
+def signed_distances(
+    tree: cKDTree, points: np.ndarray, inside: np.ndarray, truncation: float = DISTANCE_TRUNCATION
+) -> np.ndarray:
+    """(N,) float16 distance of each (N, 3) point to the nearest surface sample of ``tree`` (about 1 mm apart, so
+    exact to about that), negative ``inside``, clamped to +-``truncation``.
+
+    Example:
+        >>> tree = cKDTree(np.array([[0.0, 0.0, 0.0]]))
+        >>> signed_distances(tree, np.array([[0.01, 0, 0], [0, 0.02, 0], [1.0, 0, 0]]), np.array([0, 1, 0]) > 0,
+        ...                  0.05).round(3).tolist()
+        [0.01, -0.02, 0.05]
+    """
+    dist, _ = tree.query(points, distance_upper_bound=truncation)
+    dist = np.minimum(dist, truncation)  # beyond the bound the query answers inf
+    return np.where(inside, -dist, dist).astype(np.float16)
 
 
 def make_point_set(
@@ -201,5 +230,7 @@ def make_point_set(
     weight = part_face_weights(tm.area_faces, face_labels, part_balance) if part_balance > 0 else None
     points = sample_positions(tm, half_extent, sigmas, total, rng, weight)
     inside = inside_mesh(tm, points)
-    labels = nearest_labels(tm, face_labels, points, inside, int(rng.integers(2**31)))
-    return PointSet(points.astype(np.float32), inside.astype(np.uint8), labels)
+    tree, sample_faces = surface_samples(tm, int(rng.integers(2**31)))
+    labels = nearest_labels(tree, sample_faces, face_labels, points, inside)
+    distance = signed_distances(tree, points, inside)
+    return PointSet(points.astype(np.float32), inside.astype(np.uint8), labels, distance)

@@ -10,7 +10,7 @@ checkpoints so a resumed run continues with exactly the same data. With 3D super
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -238,17 +238,19 @@ class PointBatch:
 
     Attributes:
         points: (P, 3) canonical positions; point_object: (P,) index of each point's object in the ray batch;
-        occupancy: (P,) float 0/1 targets; labels: (P,) affordance ids (0 = no target).
+        occupancy: (P,) float 0/1 targets; labels: (P,) affordance ids (0 = no target); distance: (P,) float
+        truncated signed distances (metres, negative inside).
     """
 
     points: torch.Tensor
     point_object: torch.Tensor
     occupancy: torch.Tensor
     labels: torch.Tensor
+    distance: torch.Tensor
 
     def to(self, device: torch.device | str) -> PointBatch:
         """The batch on ``device``."""
-        return PointBatch(*(t.to(device) for t in (self.points, self.point_object, self.occupancy, self.labels)))
+        return PointBatch(*(getattr(self, f.name).to(device) for f in fields(self)))
 
 
 class PointSampler:
@@ -273,13 +275,15 @@ class PointSampler:
         for slot, object_id in enumerate(object_ids):
             pts = self.point_sets[object_id]
             index = np.sort(self.rng.integers(0, len(pts), self.per_object))  # sorted: memory-map friendly
-            parts.append((pts.points[index], np.full(len(index), slot), pts.occupancy[index], pts.labels[index]))
-        xyz, obj, occ, labels = (np.concatenate(p) for p in zip(*parts, strict=True))
+            slots = np.full(len(index), slot)
+            parts.append((pts.points[index], slots, pts.occupancy[index], pts.labels[index], pts.distance[index]))
+        xyz, obj, occ, labels, distance = (np.concatenate(p) for p in zip(*parts, strict=True))
         return PointBatch(
             torch.from_numpy(xyz).float(),
             torch.from_numpy(obj).long(),
             torch.from_numpy(occ).float(),
             torch.from_numpy(labels).long(),
+            torch.from_numpy(distance).float(),
         )
 
     def state_dict(self) -> dict[str, Any]:

@@ -28,6 +28,7 @@ from affnerf.data.format import IndexEntry
 from affnerf.errors import AffnerfError
 from affnerf.fileio import write_json_atomic
 from affnerf.model.base import ConditionedNeRF
+from affnerf.model.field import PointGeometry
 from affnerf.model.raymarch import RayOutputs
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
@@ -37,6 +38,7 @@ from affnerf.train.config import TrainConfig, check_options
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
 from affnerf.train.loss import (
+    PointWeights,
     class_weights,
     code_consistency,
     nerf_loss,
@@ -44,7 +46,7 @@ from affnerf.train.loss import (
     point_loss,
     ray_geometry_loss,
 )
-from affnerf.train.points import PointSet
+from affnerf.train.points import DISTANCE_TRUNCATION, PointSet
 from affnerf.train.precision import forward_precision
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.schedule import learning_rate, points_weight
@@ -149,8 +151,8 @@ class TrainingPass(torch.nn.Module):
 
     def forward(
         self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
-    ) -> tuple[RayOutputs, RayOutputs | None, list[tuple[torch.Tensor, torch.Tensor]] | None, dict[str, torch.Tensor]]:
-        """(coarse, fine, per-field (density, logits) at the points or None, the model's auxiliary losses), as
+    ) -> tuple[RayOutputs, RayOutputs | None, list[PointGeometry] | None, dict[str, torch.Tensor]]:
+        """(coarse, fine, per-field geometry at the points or None, the model's auxiliary losses), as
         ``model.forward`` + points."""
         m, v = self.model, self.encoded_views
         encoding = m.encode_views(batch.images[:, :v], batch.input_intrinsics[:, :v], batch.input_poses[:, :v])
@@ -292,7 +294,8 @@ class Trainer:
         the loss and steps Adam. Returns 0-d detached tensors: ``loss/total``, and ``loss/mse``,
         ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the finest pass (the fine one, the coarse one in
         a coarse-only model), with the ``train/lr`` used (a float); with points, also ``loss/occupancy`` and
-        ``loss/point_affordance`` of the finest field and the step's μ (``train/points_weight``, a float); and the
+        ``loss/point_affordance`` (and a signed-distance field's ``loss/point_distance``) of the finest field and the
+        step's μ (``train/points_weight``, a float); and the
         model's auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
         config, state = self.config, self.state
@@ -343,18 +346,19 @@ class Trainer:
             total = total + rays.total
         if points is None or geometry is None:
             return total, parts
-        slab = occupancy_slab(config.model.surface_density)
-        extra = point_loss(
-            geometry,
-            points.occupancy,
-            points.labels,
-            slab,
+        weights = PointWeights(
             mu,
             config.point_affordance_weight,
+            config.point_distance_weight,
+            occupancy_slab(config.model.surface_density),
+            DISTANCE_TRUNCATION,
             self.class_weight,
         )
+        extra = point_loss(geometry, points, weights)
         parts["loss/occupancy"] = extra.occupancy_last.detach()
         parts["loss/point_affordance"] = extra.affordance_last.detach()
+        if config.model.geometry == "sdf":
+            parts["loss/point_distance"] = extra.distance_last.detach()
         return total + extra.total, parts
 
     def after_iteration(self, outputs: IterationOutputs, out_of_time: bool) -> None:
