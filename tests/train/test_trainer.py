@@ -107,6 +107,20 @@ def test_a_run_started_from_another_runs_weights_begins_where_that_run_ended_wit
     assert main(train_argv(replace(wider, init_from=tmp_path / "nothing"))) == 2
 
 
+def test_a_checkpoint_older_than_a_model_field_counts_as_having_its_default(tiny_train_config, tmp_path, capsys):
+    first = tiny_train_config(out=tmp_path / "first", steps=2, checkpoint_every=2)
+    train(first)
+    path = first.out / "checkpoints" / "step_00000002.pt"
+    data = torch.load(path, weights_only=False)
+    del data["model_config"]["geometry"]  # as in checkpoints made before the field existed (the shipped model's)
+    torch.save(data, path)
+    second = tiny_train_config(out=tmp_path / "second", steps=1, checkpoint_every=1, init_from=path)
+    assert main(train_argv(second)) == 0
+    sdf = replace(second, out=tmp_path / "sdf", model=replace(second.model, geometry="sdf"))
+    assert main(train_argv(sdf)) == 2
+    assert "checkpoint is from another configuration (geometry 'density' vs 'sdf')" in capsys.readouterr().err
+
+
 def test_init_from_grows_a_concatenating_field_into_film_and_not_back(tiny_train_config, tmp_path, capsys):
     first = tiny_train_config(out=tmp_path / "concat", steps=6)
     train(first)

@@ -72,14 +72,13 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
 
 
 def check_compatible(data: dict[str, Any], model: ModelConfig, num_classes: int, path: Path) -> None:
-    """Refuse a checkpoint made with another architecture or class count, naming what differs."""
-    saved = data.get("model_config", {})
+    """Refuse a checkpoint made with another architecture or class count, naming what differs. A field the
+    checkpoint's configuration lacks (one added to :class:`ModelConfig` after it was made) counts as its default,
+    which is what the checkpoint's model was."""
+    saved = {**dataclasses.asdict(ModelConfig()), **data.get("model_config", {})}
     ours = dataclasses.asdict(model)
-    arch_keys = [k for k in ours if k not in NON_ARCHITECTURE_FIELDS]
     diff = [
-        f"{k} {saved.get(k, 'affnerf' if k == 'kind' else None)!r} vs {ours[k]!r}"
-        for k in arch_keys
-        if saved.get(k, "affnerf" if k == "kind" else None) != ours[k]
+        f"{k} {saved[k]!r} vs {ours[k]!r}" for k in ours if k not in NON_ARCHITECTURE_FIELDS and saved[k] != ours[k]
     ]
     if diff:
         raise input_error(path, f"checkpoint is from another configuration ({'; '.join(diff)})")
