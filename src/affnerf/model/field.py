@@ -262,8 +262,8 @@ class ConditionalField(nn.Module):
 
     def geometry(self, points: torch.Tensor, shape_code: Code) -> tuple[torch.Tensor, torch.Tensor]:
         """(N,) density and (N, C - 1) affordance logits at points (no colour), for labelling meshes."""
-        h = self.trunk(points, shape_code)
-        return self.density_from(h), self.affordance(self.feature(h))
+        out = self.supervised(points, shape_code)
+        return out.density, out.logits
 
     def supervised(self, points: torch.Tensor, shape_code: Code) -> PointGeometry:
         """What 3D supervision compares with its targets at (N, 3) points (:class:`PointGeometry`)."""
