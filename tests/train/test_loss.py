@@ -25,7 +25,7 @@ def test_a_point_farther_out_than_the_truncation_only_has_to_be_said_to_be_far()
     pred = torch.tensor([0.3, 0.02, -0.01], requires_grad=True)
     loss = truncated_distance_l1(pred, target, 0.05)
     loss.backward()
-    assert abs(float(loss) - 0.03 / 0.05 / 3) < 1e-6
+    assert abs(loss.item() - 0.03 / 0.05 / 3) < 1e-6
     assert pred.grad[0] == 0 and pred.grad[1] < 0  # beyond the truncation: no pull; short of it: pushed out
 
 

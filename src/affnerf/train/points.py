@@ -196,7 +196,7 @@ def signed_distances(
     Example:
         >>> tree = cKDTree(np.array([[0.0, 0.0, 0.0]]))
         >>> signed_distances(tree, np.array([[0.01, 0, 0], [0, 0.02, 0], [1.0, 0, 0]]), np.array([0, 1, 0]) > 0,
-        ...                  0.05).round(3).tolist()
+        ...                  0.05).astype(float).round(3).tolist()
         [0.01, -0.02, 0.05]
     """
     dist, _ = tree.query(points, distance_upper_bound=truncation)
