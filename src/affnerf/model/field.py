@@ -224,21 +224,24 @@ class ConditionalField(nn.Module):
             h = torch.relu(h)
         return h
 
-    def distance_from(self, h: torch.Tensor) -> torch.Tensor | None:
-        """(N,) signed distance (metres) from trunk features, or None when the field is not a signed-distance one."""
-        return None if self.log_beta is None else self.density(h)[..., 0] + SDF_START
-
     def beta(self) -> torch.Tensor | None:
         """The Laplace scale of a signed-distance field (0-d, metres), or None."""
         return None if self.log_beta is None else self.log_beta.exp().clamp(min=SDF_BETA_MIN)
 
+    def density_and_distance(self, h: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """(N,) non-negative density from trunk features, with the (N,) signed distance (metres) it comes from, from
+        one pass of the head: :func:`laplace_density` of the distance for a signed-distance field; else a softplus
+        of the head, shifted so a fresh field starts nearly empty, and None."""
+        raw = self.density(h)[..., 0]
+        beta = self.beta()
+        if beta is None:
+            return nn.functional.softplus(raw - 1.0), None
+        distance = raw + SDF_START
+        return laplace_density(distance, beta), distance
+
     def density_from(self, h: torch.Tensor) -> torch.Tensor:
-        """(N,) non-negative density from trunk features: a softplus of the head, shifted so a fresh field starts
-        nearly empty, or :func:`laplace_density` of the signed distance."""
-        distance, beta = self.distance_from(h), self.beta()
-        if distance is None or beta is None:
-            return nn.functional.softplus(self.density(h)[..., 0] - 1.0)
-        return laplace_density(distance, beta)
+        """(N,) non-negative density from trunk features (:meth:`density_and_distance`)."""
+        return self.density_and_distance(h)[0]
 
     def forward(self, points: torch.Tensor, dirs: torch.Tensor, shape_code: Code, appearance_code: Code) -> FieldOutput:
         """Evaluate the field.
@@ -268,4 +271,5 @@ class ConditionalField(nn.Module):
     def supervised(self, points: torch.Tensor, shape_code: Code) -> PointGeometry:
         """What 3D supervision compares with its targets at (N, 3) points (:class:`PointGeometry`)."""
         h = self.trunk(points, shape_code)
-        return PointGeometry(self.density_from(h), self.affordance(self.feature(h)), self.distance_from(h))
+        density, distance = self.density_and_distance(h)
+        return PointGeometry(density, self.affordance(self.feature(h)), distance)
