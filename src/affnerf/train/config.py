@@ -166,14 +166,16 @@ PAPER = TrainConfig(data=Path("."), out=Path("."))
 #: encoders on 64-pixel crops, a 4-layer 64-wide field, 24 + 24 samples inside the canonical cube, 256 rays over
 #: 8 objects a step with 512 supervision points each (16 objects a step in all on the shipped model's two processes),
 #: training at a quarter of the dataset's resolution, lambda 4e-2; beyond the paper, 3D supervision from the training
-#: meshes at weight 0.1 (results/ablation_ladder.md; the other options of the quality work, FiLM, mask/depth losses,
-#: class balancing, input jitter and triplanes, stay off: they did not pay at equal time). More objects a step at the
-#: same rays and points pays at equal time (results/batch_shape.md: 16 objects 0.607 against 4 objects' 0.565
-#: validation mIoU); 46,000 steps are about 98 minutes of two single-threaded processes (torchrun) on 2 cores.
+#: meshes at weight 0.1 (results/ablation_ladder.md) and a signed-distance field whose density is VolSDF's Laplace
+#: CDF of it (results/sdf_geometry.md: +0.044 validation mIoU, +0.065 F@1cm at equal time); the other options of the
+#: quality work, FiLM, mask/depth losses, class balancing, input jitter and triplanes, stay off: they did not pay at
+#: equal time. More objects a step at the same rays and points pays at equal time (results/batch_shape.md: 16
+#: objects 0.607 against 4 objects' 0.565 validation mIoU); 29,500 steps are about 83 minutes of two
+#: single-threaded processes (torchrun) on 2 cores (results/sdf_recipe.md).
 SMALL = replace(
     PAPER,
     config="small",
-    steps=46_000,
+    steps=29_500,
     model=ModelConfig(
         encoder_width=0.25,
         encoder_resolution=64,
@@ -184,6 +186,7 @@ SMALL = replace(
         num_coarse=24,
         num_fine=24,
         clip_to_cube=True,
+        geometry="sdf",
     ),
     optim=OptimConfig(lr=1e-3, lr_final=2e-5),
     objects_per_step=8,
