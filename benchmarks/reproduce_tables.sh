@@ -12,12 +12,12 @@ W="${WORK:-benchmarks/.work/tables}"
 R="benchmarks/results"
 DEVICE="${DEVICE:-cpu}"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
-STEPS="${STEPS:-46000}"           # AFF-NeRF, small configuration, all eight categories (98 min)
+STEPS="${STEPS:-29500}"           # AFF-NeRF, small configuration, all eight categories (83 min)
 NPROC="${NPROC:-2}"               # its processes (DistributedDataParallel, gloo on CPUs); 1 on a single GPU
 PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views), the full-protocol run (38 min)
 # the three posed baselines of the shared protocol, each 27 minutes of one core at most (their steps fill it)
 BASE_STEPS="${BASE_STEPS:-pixelnerf:4500 semantic-ray:2400 gsnerf:2300}"
-LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (38 min of one core, two side by side)
+LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (48 min of one core, beside another run)
 LOCO_BASE_STEPS="${LOCO_BASE_STEPS:-pixelnerf:1500 semantic-ray:800 gsnerf:780}"  # and the baselines', 9 min each
 # the posed baselines' committed rows were trained with the small preset as it was before 2026-11-26
 OLD_SMALL="--objects-per-step 4 --points-per-object 1024 --optim.lr-final 1e-4"
@@ -33,13 +33,14 @@ all_but() { python3 -c "import sys; c='screwdriver pen scissors eyeglasses bucke
 $A data generate --out "$W/data" --objects-per-category 80 --views 30 --workers 2 --seed 0
 
 # 2. training (on the CPU machine these ran two at a time, stopped by their time limits: see MODEL_CARD.md)
-# the shipped model: one schedule (1e-3 -> 2e-5) over 46,000 steps, 8 objects a step on each process (16 in all)
+# the shipped model (a signed-distance field, the preset since 2026-11-28): one schedule (1e-3 -> 2e-5) over 29,500
+# steps, 8 objects a step on each process (16 in all)
 .venv/bin/torchrun --standalone --nproc_per_node "$NPROC" -m affnerf.cli.main train --data "$W/data" --out "$W/affnerf" \
-    --config small --steps "$STEPS" --time-limit 100 --device "$DEVICE" --checkpoint-every 1000 --keep-checkpoints 4 \
+    --config small --steps "$STEPS" --time-limit 90 --device "$DEVICE" --checkpoint-every 1000 --keep-checkpoints 4 \
     --val-every 0 $(resume "$W/affnerf")
-# then a further stage from those weights on one process (the committed run: one core, beside another run, 35 min;
-# benchmarks/results/fine_tune_consistency.md): a fresh Adam, 2e-4 -> 2e-5 over 19,000 steps
-$A train --data "$W/data" --out "$W/affnerf-stage2" --config small --steps 19000 --time-limit 40 --device "$DEVICE" \
+# then a further stage from those weights on one process (the committed run: one core, beside a leave-one-out run,
+# 51 min; benchmarks/results/sdf_recipe.md): a fresh Adam, 2e-4 -> 2e-5 over 19,000 steps
+$A train --data "$W/data" --out "$W/affnerf-stage2" --config small --steps 19000 --time-limit 55 --device "$DEVICE" \
     --checkpoint-every 1000 --keep-checkpoints 4 --val-every 0 --init-from "$W/affnerf" --optim.lr 2e-4 \
     --optim.lr-final 2e-5 $(resume "$W/affnerf-stage2")
 $A train --data "$W/data" --out "$W/pixelnerf-full" --config small $OLD_SMALL --steps "$PIX_STEPS" --time-limit 38 \
@@ -50,7 +51,7 @@ for kind_steps in $BASE_STEPS; do
         --device "$DEVICE" --model.kind "$kind" --input-views 3 --checkpoint-every 250 $(resume "$W/$kind")
 done
 for held in teapot scissors; do
-    $A train --data "$W/data" --out "$W/loco-$held" --config small --steps "$LOCO_STEPS" --time-limit 45 --device "$DEVICE" \
+    $A train --data "$W/data" --out "$W/loco-$held" --config small --steps "$LOCO_STEPS" --time-limit 55 --device "$DEVICE" \
         --categories "$(all_but $held)" $(resume "$W/loco-$held")
     for kind_steps in $LOCO_BASE_STEPS; do
         kind=${kind_steps%%:*}
