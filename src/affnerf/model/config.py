@@ -62,7 +62,8 @@ class ModelConfig:
             ``sdf`` (beyond the paper: a signed distance whose density is VolSDF's Laplace CDF with a learnt scale,
             :func:`affnerf.model.field.laplace_density`; with 3D supervision it is also trained towards each point's
             truncated distance to the true surface, ``TrainConfig.point_distance_weight``), so free space near a
-            thin part or inside a hollow object carries how far the surface is, not only that it is outside.
+            thin part or inside a hollow object carries how far the surface is, not only that it is outside; the
+            ``small`` preset's field and the shipped model's.
         plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
         plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
