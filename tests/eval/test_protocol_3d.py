@@ -59,6 +59,12 @@ def test_the_true_mesh_scores_near_perfectly(objects):
         assert block["chamfer_l1"] < 0.002 and block["fscore_1cm"] > 0.99
         # independent samples: points near a part boundary may take the neighbour's label (thin parts lose most)
         assert block["affordance_miou_3d"] > 0.9 and block["meshes_empty"] == 0
+    for cat in result["categories"].values():  # per class: the oracle is right but for a few edge pixels
+        conf = np.array(cat["confusion"])
+        assert conf.sum() > 0 and np.trace(conf) / conf.sum() > 0.95
+        present = [c for c in cat["IoU_per_class"] if c is not None]
+        assert len(present) == (conf.sum(axis=1) > 0).sum()
+        assert np.isclose(np.mean(present), cat["mIoU"])
 
 
 def test_an_empty_mesh_scores_zero_without_a_chamfer_distance(objects):

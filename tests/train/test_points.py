@@ -153,3 +153,34 @@ def test_a_small_part_gets_more_near_surface_points_with_part_balance():
     assert top_share(plain) < 0.3 < 0.4 < top_share(balanced)
     inside = np.all(np.abs(balanced.points) < 0.1, axis=1)
     np.testing.assert_array_equal(balanced.occupancy.astype(bool), inside)
+
+
+def _capped_rod() -> LabelledMesh:
+    """A pen-like rod along x (radius 10 mm, label 1) whose +x half is covered by a cap (radius 12 mm, label 5)."""
+    rod = trimesh.creation.cylinder(radius=0.01, height=0.2, sections=48, transform=_along_x(0.0))
+    cap = trimesh.creation.cylinder(radius=0.012, height=0.1, sections=48, transform=_along_x(0.055))
+    both = trimesh.util.concatenate([rod, cap])
+    labels = np.r_[np.full(len(rod.faces), 1), np.full(len(cap.faces), 5)]
+    return LabelledMesh(np.asarray(both.vertices), np.asarray(both.faces), face_props={"affordance": labels})
+
+
+def _along_x(offset: float) -> np.ndarray:
+    turn = trimesh.transformations.rotation_matrix(np.pi / 2, (0.0, 1.0, 0.0))
+    turn[0, 3] = offset
+    return turn
+
+
+def test_a_face_hidden_under_another_part_gives_no_label_or_distance():
+    # Just under the cap's skin (radius 10.5-11.5 mm) the nearest face is the rod's hidden one (0.5-1.5 mm away)
+    # but the surface a camera sees is the cap's: the label must be the cap's and the distance to the cap.
+    mesh = _capped_rod()
+    ps = make_point_set(mesh, 0.25, (0.002,), seed=0, total=40000)
+    p = np.asarray(ps.points, np.float64)
+    radius = np.hypot(p[:, 1], p[:, 2])
+    under_cap = (p[:, 0] > 0.02) & (p[:, 0] < 0.09) & (radius > 0.0105) & (radius < 0.0115)
+    assert under_cap.sum() > 50 and (ps.occupancy[under_cap] == 1).all()
+    assert (ps.labels[under_cap] == 5).all()
+    got = np.asarray(ps.distance[under_cap], np.float64)
+    np.testing.assert_allclose(got, radius[under_cap] - 0.012, atol=1.5e-3)
+    bare = (p[:, 0] < -0.02) & (p[:, 0] > -0.08) & (radius > 0.0085) & (radius < 0.0095)
+    assert bare.sum() > 50 and (ps.labels[bare] == 1).all()  # the visible rod keeps its label

@@ -32,7 +32,13 @@ from affnerf.eval.surface import (
     true_samples,
 )
 from affnerf.metrics.image import psnr
-from affnerf.metrics.segmentation import confusion_matrix, mean_iou, segmentation_metrics
+from affnerf.metrics.segmentation import (
+    confusion_matrix,
+    iou_per_class,
+    mean_iou,
+    present_classes,
+    segmentation_metrics,
+)
 from affnerf.metrics.surface import SurfaceSamples
 
 METRIC_KEYS = ("mIoU", "PA", "MPA", "mIoU_object", "PA_object", "MPA_object", "PSNR")
@@ -163,6 +169,7 @@ class EvalResult:
         cats: dict[str, dict[str, Any]] = {}
         for name, c in sorted(self.categories.items()):
             m: dict[str, Any] = segmentation_metrics(c.confusion)
+            m.update(per_class_scores(c.confusion))
             m["PSNR"] = float(np.mean(c.psnr)) if c.psnr else None
             if self.metrics_3d:
                 m.update(category_surface(c.surface))
@@ -173,6 +180,15 @@ class EvalResult:
         if self.stability_views:
             out["stability"] = stability_json(self.stability, self.stability_views)
         return out
+
+
+def per_class_scores(conf: np.ndarray) -> dict[str, Any]:
+    """``IoU_per_class``: (C,) IoU of each class present in the (C, C) ground-truth-by-prediction ``conf`` (None for
+    the absent ones, which the means leave out), and ``confusion`` itself as nested lists, in vocabulary order."""
+    iou = iou_per_class(conf)
+    present = set(present_classes(conf).tolist())
+    per_class = [float(v) if k in present else None for k, v in enumerate(iou)]
+    return {"IoU_per_class": per_class, "confusion": conf.astype(int).tolist()}
 
 
 def category_mean(cats: dict[str, dict[str, Any]], metrics_3d: bool) -> dict[str, Any]:

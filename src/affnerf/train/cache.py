@@ -203,7 +203,7 @@ def cached_frames(obj: ObjectData, cache_dir: Path, scale: float, crop_size: int
 
 
 #: Bumped when point sets are made differently, so older ones are rebuilt.
-POINTS_VERSION = 3
+POINTS_VERSION = 4
 
 
 def _points_signature(

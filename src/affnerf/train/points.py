@@ -22,7 +22,9 @@ its affordance part's total area to the power -b: at b = 1 every part gets the s
 small its surface (a bucket's bail, a cabinet's handles), at b = 0 the plain area weighting.
 
 The nearest face is that of the nearest of :data:`SURFACE_SAMPLES` area-weighted surface samples (about 1 mm apart
-on a 0.44 m object), so labels are exact up to the sample spacing; points deeper inside than the band use every
+on a 0.44 m object) that lie on the object's outer boundary (:func:`outer_samples`: faces sunk inside another part
+are not its surface), so labels and distances are those of the surface the cameras see, exact up to the sample
+spacing; points deeper inside than the band use every
 :data:`DEEP_STRIDE`-th sample (about 3 mm apart), which only matters where two parts are nearly equidistant.
 """
 
@@ -48,6 +50,10 @@ DEEP_STRIDE = 8
 LABEL_BAND = 0.01
 #: Signed distances are kept up to this magnitude (metres); points farther from the surface hold +-this value.
 DISTANCE_TRUNCATION = 0.05
+#: Step (metres) to either side of a surface sample in the hidden-face test of :func:`outer_samples`.
+HIDDEN_STEP = 3e-4
+#: Below this share of outer samples the hidden-face test is taken for failed and every sample is kept.
+MIN_OUTER_SHARE = 0.2
 
 
 def _directions() -> np.ndarray:
@@ -157,10 +163,35 @@ def inside_mesh(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
     return votes * 2 > len(RAY_DIRECTIONS)
 
 
+def outer_samples(mesh: trimesh.Trimesh, samples: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(S,) bool: whether each (S, 3) surface sample of ``mesh`` (on the (S,) ``faces``) lies on the object's outer
+    boundary, i.e. not both of the points :data:`HIDDEN_STEP` to either side of its face are inside the mesh
+    (:func:`inside_mesh`). A face of one part sunk into another (a pen's barrel under its cap, a spout's root in a
+    teapot's body, the overlap of two scissor blades) has solid on both sides: no camera sees it and it is not the
+    object's surface. Testing both sides makes the answer independent of the faces' orientation.
+
+    Example:
+        >>> a, b = trimesh.creation.box(extents=(1, 1, 1)), trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+        >>> both = trimesh.util.concatenate([a, b])  # b sits wholly inside a
+        >>> outer_samples(both, np.array([[0.5, 0.0, 0.0], [0.25, 0.0, 0.0]]), np.array([10, 22])).tolist()
+        [True, False]
+    """
+    step = HIDDEN_STEP * mesh.face_normals[faces]
+    hidden = inside_mesh(mesh, samples + step)
+    if hidden.any():
+        hidden[hidden] = inside_mesh(mesh, samples[hidden] - step[hidden])
+    return ~hidden
+
+
 def surface_samples(mesh: trimesh.Trimesh, seed: int) -> tuple[cKDTree, np.ndarray]:
-    """A k-d tree over :data:`SURFACE_SAMPLES` area-weighted surface samples of ``mesh`` and the (S,) face of each
-    sample: the samples stand for the faces in nearest-face and distance queries."""
+    """A k-d tree over the outer ones (:func:`outer_samples`) of :data:`SURFACE_SAMPLES` area-weighted surface
+    samples of ``mesh`` and the (S,) face of each: the samples stand for the faces in nearest-face and distance
+    queries, so a point near a hidden face takes the label of, and its distance to, the surface a camera sees
+    (all samples are kept where the test finds almost none outer: a mesh it cannot read)."""
     samples, faces = trimesh.sample.sample_surface(mesh, SURFACE_SAMPLES, seed=seed)
+    outer = outer_samples(mesh, samples, np.asarray(faces))
+    if outer.mean() >= MIN_OUTER_SHARE:
+        samples, faces = samples[outer], np.asarray(faces)[outer]
     return cKDTree(samples), np.asarray(faces)
 
 
