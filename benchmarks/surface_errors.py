@@ -7,7 +7,7 @@ the true part's surface samples within 1 cm of the predicted surface. A bail, a 
 does not have shows as a part recall near 0 whatever the body scores. Beside them, the volume: of points drawn
 uniformly in the true object's convex hull, the share of those inside the true mesh that the predicted mesh also
 encloses (``solid``), and of those outside it (the cavity of a bucket or a cabinet, the gap under a handle) the share
-the predicted mesh fills (``cavity_filled``), both by :func:`affnerf.train.points.inside_mesh`.
+the predicted mesh fills (``cavity_filled``), both by :func:`affnerf.solid.inside_mesh`.
 
     .venv/bin/python benchmarks/surface_errors.py --data DATA --run src/affnerf/weights/affnerf-small.pt \
         --methods affnerf,retrieval --out OUT.json [--split test --per-category 5 --resolution 128]
@@ -30,7 +30,7 @@ from affnerf.eval.runner import EvalConfig, build_method
 from affnerf.eval.surface import mesh_samples, method_mesh, sample_seed, true_samples
 from affnerf.meshio import LabelledMesh, read_labelled_ply
 from affnerf.metrics.surface import FSCORE_TAU, fscore_from_distances, nearest
-from affnerf.train.points import inside_mesh
+from affnerf.solid import inside_mesh
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 

@@ -11,7 +11,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "affnerf"
 
 #: Lowest first; a module may import from its own layer or a lower one. Same as the table in docs/architecture.md.
 LAYERS = [
-    {"errors", "vocab", "fileio", "meshio", "environment"},
+    {"errors", "vocab", "fileio", "meshio", "solid", "environment"},
     {"objects"},
     {"data"},
     {"rendering", "metrics", "pictures"},

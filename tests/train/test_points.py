@@ -8,12 +8,12 @@ import trimesh
 
 from affnerf.errors import AffnerfError
 from affnerf.meshio import LabelledMesh, write_labelled_ply
+from affnerf.solid import inside_mesh
 from affnerf.train import cache as cache_module
 from affnerf.train.cache import cached_points
 from affnerf.train.points import (
     DISTANCE_TRUNCATION,
     LABEL_BAND,
-    inside_mesh,
     make_point_set,
     part_face_weights,
     split_counts,

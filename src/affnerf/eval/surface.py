@@ -13,10 +13,18 @@ import zlib
 from typing import Any, Protocol
 
 import numpy as np
+import trimesh
 
 from affnerf.data.dataset import ObjectData
-from affnerf.meshio import LabelledMesh, read_labelled_ply
-from affnerf.metrics.surface import SURFACE_KEYS, SurfaceSamples, sample_surface, surface_metrics
+from affnerf.meshio import LabelledMesh, read_labelled_ply, sample_surface_points
+from affnerf.metrics.surface import (
+    SURFACE_KEYS,
+    SURFACE_SAMPLES,
+    SurfaceSamples,
+    empty_samples,
+    surface_metrics,
+)
+from affnerf.solid import keep_outer
 
 #: Per-object 3D scores: the :data:`~affnerf.metrics.surface.SURFACE_KEYS` values, or None for no mesh.
 SurfaceScore = dict[str, float | None]
@@ -46,9 +54,15 @@ def sample_seed(seed: int, object_id: str) -> list[int]:
 
 
 def mesh_samples(mesh: LabelledMesh, seed: list[int]) -> SurfaceSamples:
-    """Area-weighted samples of a labelled mesh; faces without an ``affordance`` property count as background."""
-    labels = mesh.face_props.get("affordance", np.zeros(len(mesh.faces), np.int64))
-    return sample_surface(mesh.vertices, mesh.faces, labels, rng=np.random.default_rng(seed))
+    """Area-weighted samples of a labelled mesh's outer surface (:func:`affnerf.solid.keep_outer`: samples on faces
+    sunk into another part, which no camera sees, are dropped); faces without an ``affordance`` property count as
+    background."""
+    labels = np.asarray(mesh.face_props.get("affordance", np.zeros(len(mesh.faces), np.int64)), np.int64)
+    points, faces = sample_surface_points(mesh.vertices, mesh.faces, SURFACE_SAMPLES, np.random.default_rng(seed))
+    if not len(points):
+        return empty_samples()
+    points, faces = keep_outer(trimesh.Trimesh(mesh.vertices, mesh.faces, process=False), points, faces)
+    return SurfaceSamples(points, labels[faces])
 
 
 def true_samples(obj: ObjectData, seed: int) -> SurfaceSamples:

@@ -9,23 +9,18 @@ rest near the surface (area-weighted surface samples moved by Gaussian noise of 
 - a **signed distance** target: the distance to the surface, negative inside, truncated at :data:`DISTANCE_TRUNCATION`
   (DeepSDF's clamp; read only by fields whose geometry is a signed distance, ``--model.geometry sdf``).
 
-Inside or outside (:func:`inside_mesh`): rays are cast from each point in :data:`RAY_DIRECTIONS` (5 fixed, not
-axis-aligned), and the majority of the 5 answers is kept, so a ray that slips through a crack between faces, hits
-an edge twice or escapes through a small hole is outvoted. For a closed, consistently oriented mesh (every
-procedural object) each answer is the ray's signed crossing count (exits minus entries: the winding number), so
-parts that interpenetrate (a handle sunk into a body) are inside where they overlap. Other meshes (PartNet-Mobility
-meshes are often open or inconsistently oriented) use the parity of the crossings, which ignores face orientation;
-there, a region enclosed twice by overlapping parts counts as outside, and open sheets enclose nothing.
+Inside or outside: :func:`affnerf.solid.inside_mesh` (a majority of 5 ray tests; winding numbers on closed meshes,
+so parts that interpenetrate are inside where they overlap).
 
 With a part balance b > 0 (:func:`part_face_weights`), the near-surface samples weight each face by its area times
 its affordance part's total area to the power -b: at b = 1 every part gets the same share of the points however
 small its surface (a bucket's bail, a cabinet's handles), at b = 0 the plain area weighting.
 
 The nearest face is that of the nearest of :data:`SURFACE_SAMPLES` area-weighted surface samples (about 1 mm apart
-on a 0.44 m object) that lie on the object's outer boundary (:func:`outer_samples`: faces sunk inside another part
-are not its surface), so labels and distances are those of the surface the cameras see, exact up to the sample
-spacing; points deeper inside than the band use every
-:data:`DEEP_STRIDE`-th sample (about 3 mm apart), which only matters where two parts are nearly equidistant.
+on a 0.44 m object) that lie on the object's outer boundary (:func:`affnerf.solid.outer_samples`: faces sunk into
+another part are not its surface), so labels and distances are those of the surface the cameras see, exact up to
+the sample spacing; points deeper inside than the band use every :data:`DEEP_STRIDE`-th sample (about 3 mm apart),
+which only matters where two parts are nearly equidistant.
 """
 
 from __future__ import annotations
@@ -37,6 +32,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from affnerf.meshio import LabelledMesh
+from affnerf.solid import inside_mesh, keep_outer
 
 #: Points kept per object (N).
 POINT_SET_SIZE = 65536
@@ -50,19 +46,6 @@ DEEP_STRIDE = 8
 LABEL_BAND = 0.01
 #: Signed distances are kept up to this magnitude (metres); points farther from the surface hold +-this value.
 DISTANCE_TRUNCATION = 0.05
-#: Step (metres) to either side of a surface sample in the hidden-face test of :func:`outer_samples`.
-HIDDEN_STEP = 3e-4
-#: Below this share of outer samples the hidden-face test is taken for failed and every sample is kept.
-MIN_OUTER_SHARE = 0.2
-
-
-def _directions() -> np.ndarray:
-    d = np.random.default_rng(7).normal(size=(5, 3))
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-#: (5, 3) unit directions of the inside test's rays (fixed, so a point set depends only on the mesh).
-RAY_DIRECTIONS = _directions()
 
 
 @dataclass
@@ -137,62 +120,14 @@ def sample_positions(
     return np.clip(np.concatenate(parts), -half_extent, half_extent)
 
 
-def _crossings(mesh: trimesh.Trimesh, points: np.ndarray, direction: np.ndarray, signed: bool) -> np.ndarray:
-    """(N,) per point, the winding number (``signed``) or the number of faces the ray along ``direction`` crosses."""
-    dirs = np.broadcast_to(direction, points.shape)
-    tri, ray = mesh.ray.intersects_id(points, dirs, multiple_hits=True, return_locations=False)
-    weights = np.sign(mesh.face_normals[tri] @ direction) if signed else np.ones(len(tri))
-    return np.bincount(ray, weights=weights, minlength=len(points))
-
-
-def inside_mesh(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
-    """(N,) bool: whether each (N, 3) point is inside ``mesh``, by a majority of 5 ray tests (see the module
-    docstring: winding numbers on closed, consistently oriented meshes, crossing parity on others).
-
-    Example:
-        >>> box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
-        >>> inside_mesh(box, np.array([[0.1, 0.2, 0.3], [0.6, 0.0, 0.0], [0.0, 0.0, -0.7]])).tolist()
-        [True, False, False]
-    """
-    merged = trimesh.Trimesh(mesh.vertices, mesh.faces, process=True)
-    signed = bool(merged.is_watertight and merged.is_winding_consistent)
-    votes = np.zeros(len(points), dtype=int)
-    for direction in RAY_DIRECTIONS:
-        count = _crossings(merged, points, direction, signed)
-        votes += (count > 0.5) if signed else (np.rint(count).astype(int) % 2 == 1)
-    return votes * 2 > len(RAY_DIRECTIONS)
-
-
-def outer_samples(mesh: trimesh.Trimesh, samples: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(S,) bool: whether each (S, 3) surface sample of ``mesh`` (on the (S,) ``faces``) lies on the object's outer
-    boundary, i.e. not both of the points :data:`HIDDEN_STEP` to either side of its face are inside the mesh
-    (:func:`inside_mesh`). A face of one part sunk into another (a pen's barrel under its cap, a spout's root in a
-    teapot's body, the overlap of two scissor blades) has solid on both sides: no camera sees it and it is not the
-    object's surface. Testing both sides makes the answer independent of the faces' orientation.
-
-    Example:
-        >>> a, b = trimesh.creation.box(extents=(1, 1, 1)), trimesh.creation.box(extents=(0.5, 0.5, 0.5))
-        >>> both = trimesh.util.concatenate([a, b])  # b sits wholly inside a
-        >>> outer_samples(both, np.array([[0.5, 0.0, 0.0], [0.25, 0.0, 0.0]]), np.array([10, 22])).tolist()
-        [True, False]
-    """
-    step = HIDDEN_STEP * mesh.face_normals[faces]
-    hidden = inside_mesh(mesh, samples + step)
-    if hidden.any():
-        hidden[hidden] = inside_mesh(mesh, samples[hidden] - step[hidden])
-    return ~hidden
-
-
 def surface_samples(mesh: trimesh.Trimesh, seed: int) -> tuple[cKDTree, np.ndarray]:
-    """A k-d tree over the outer ones (:func:`outer_samples`) of :data:`SURFACE_SAMPLES` area-weighted surface
-    samples of ``mesh`` and the (S,) face of each: the samples stand for the faces in nearest-face and distance
-    queries, so a point near a hidden face takes the label of, and its distance to, the surface a camera sees
-    (all samples are kept where the test finds almost none outer: a mesh it cannot read)."""
+    """A k-d tree over the outer ones (:func:`~affnerf.solid.outer_samples`) of :data:`SURFACE_SAMPLES`
+    area-weighted surface samples of ``mesh`` and the (S,) face of each: the samples stand for the faces in
+    nearest-face and distance queries, so a point near a hidden face takes the label of, and its distance to, the
+    surface a camera sees (all samples are kept where the test finds almost none outer: a mesh it cannot read)."""
     samples, faces = trimesh.sample.sample_surface(mesh, SURFACE_SAMPLES, seed=seed)
-    outer = outer_samples(mesh, samples, np.asarray(faces))
-    if outer.mean() >= MIN_OUTER_SHARE:
-        samples, faces = samples[outer], np.asarray(faces)[outer]
-    return cKDTree(samples), np.asarray(faces)
+    samples, faces = keep_outer(mesh, samples, np.asarray(faces))
+    return cKDTree(samples), faces
 
 
 def nearest_labels(
