@@ -12,7 +12,7 @@
 #   RUN=src/affnerf/weights/affnerf-small.pt bash benchmarks/gpu_eval.sh
 #
 # On the 2-core CPU machine (how the tables of 2026-11-28 were made: 46 minutes for table2 and base, niced beside a
-# training on the other core):
+# training on the other core; table2 alone again with 3D on outer surfaces, beside a demo run, 71 minutes):
 #   PY=.venv/bin/python DEVICE=cpu GPU_THREADS=1 DATA=DATA PROTOCOLS="table2 base" bash benchmarks/gpu_eval.sh
 #
 # Writes $OUT/device.txt, $OUT/tests.log and $OUT/gpu_eval.tar.gz (one folder per protocol and category, logs). A

@@ -50,8 +50,18 @@ def inside_mesh(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
         >>> inside_mesh(box, np.array([[0.1, 0.2, 0.3], [0.6, 0.0, 0.0], [0.0, 0.0, -0.7]])).tolist()
         [True, False, False]
     """
+    return _inside(*_solid(mesh), points)
+
+
+def _solid(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, bool]:
+    """``mesh`` with its duplicate vertices merged (so shared edges connect), and whether it is closed and
+    consistently oriented (winding numbers apply) rather than read by crossing parity."""
     merged = trimesh.Trimesh(mesh.vertices, mesh.faces, process=True)
-    signed = bool(merged.is_watertight and merged.is_winding_consistent)
+    return merged, bool(merged.is_watertight and merged.is_winding_consistent)
+
+
+def _inside(merged: trimesh.Trimesh, signed: bool, points: np.ndarray) -> np.ndarray:
+    """:func:`inside_mesh` on a mesh already prepared by :func:`_solid`."""
     votes = np.zeros(len(points), dtype=int)
     for direction in RAY_DIRECTIONS:
         count = _crossings(merged, points, direction, signed)
@@ -73,9 +83,10 @@ def outer_samples(mesh: trimesh.Trimesh, samples: np.ndarray, faces: np.ndarray)
         [True, False]
     """
     step = HIDDEN_STEP * mesh.face_normals[faces]
-    hidden = inside_mesh(mesh, samples + step)
+    solid = _solid(mesh)  # merged and ray-indexed once for both sides
+    hidden = _inside(*solid, samples + step)
     if hidden.any():
-        hidden[hidden] = inside_mesh(mesh, samples[hidden] - step[hidden])
+        hidden[hidden] = _inside(*solid, samples[hidden] - step[hidden])
     return ~hidden
 
 
