@@ -292,3 +292,11 @@ def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_s
         whole = segment.segment(_composite()[0], "auto", box=whole_image, segmenter=segmenter)
         assert whole.source == ("grabcut" if segmenter else "segmenter")
         assert segment.mask_iou(whole.mask, _composite()[1]) > 0.8
+
+
+def test_the_predict_help_states_the_box_rules_confidence():
+    from affnerf.predict.outputs import PredictConfig
+
+    stated = f"at least {round(100 * segment.BOX_SEGMENTER_CONFIDENCE)} %"
+    doc = " ".join(PredictConfig.__doc__.split())
+    assert stated in doc, "PredictConfig.box's doc must state the box rule's threshold"
