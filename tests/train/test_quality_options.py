@@ -138,3 +138,9 @@ def test_view_consistency_refuses_what_it_cannot_compare(tiny_train_config, over
         overrides = {"model": replace(config.model, kind=overrides["model"])}
     with pytest.raises(AffnerfError, match=message):
         train(replace(config, **overrides))
+
+
+def test_the_pixel_labelling_head_refuses_jittered_crops(tiny_train_config):
+    config = tiny_train_config(input_jitter=1.0)
+    with pytest.raises(AffnerfError, match="input-jitter 0"):
+        train(replace(config, model=replace(config.model, view_affordance_weight=0.1)))

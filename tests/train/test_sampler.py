@@ -104,10 +104,13 @@ def test_the_input_crops_depth_is_the_objects_depth_where_the_crops_show_it(trai
         has_depth = batch.input_depth[b].numpy() > 0
         assert (shows_object == has_depth).mean() > 0.9 and 0.05 < has_depth.mean() < 0.9
         assert has_depth.any() and (batch.input_depth[b][batch.input_depth[b] > 0] < 3.0).all()
+        # the crops' labels come from the same pixels: an object where there is depth, background elsewhere
+        np.testing.assert_array_equal(batch.input_labels[b].numpy() > 0, has_depth)
 
 
 def test_a_sampler_without_input_views_gives_empty_inputs_and_full_ray_batches(train_dataset, tmp_path):
     # Semantic-NeRF fits one object from its targets alone: no encoder views, so no input crops or depths.
     batch = RaySampler(_frames(train_dataset, tmp_path)[:1], 1, 64, 0.5, seed=0, input_views=0).next_batch()
     assert batch.images.shape == (1, 0, 3, 32, 32) and batch.input_depth.shape == (1, 0, 32, 32)
+    assert batch.input_labels.shape == (1, 0, 32, 32)
     assert batch.origins.shape == (64, 3) and batch.encoder_view.shape == (1, 0)

@@ -140,6 +140,22 @@ def test_init_from_grows_a_concatenating_field_into_film_and_not_back(tiny_train
     assert "conditioning 'film' vs 'concat'" in capsys.readouterr().err
 
 
+def test_init_from_grows_a_pixel_labelling_head_and_training_logs_its_loss(tiny_train_config, tmp_path):
+    first = tiny_train_config(out=tmp_path / "plain", steps=4)
+    train(first)
+    ended = torch.load(first.out / "checkpoints" / "step_00000004.pt", weights_only=True)["model"]
+    labelled = replace(first, out=tmp_path / "labelled", steps=4, init_from=first.out)
+    labelled = replace(labelled, model=replace(labelled.model, view_affordance_weight=0.1))
+    trainer = Trainer(labelled, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    grown = trainer.state.model.state_dict()
+    assert sorted(set(grown) - set(ended)) == ["shape_encoder.label_head.bias", "shape_encoder.label_head.weight"]
+    assert all(torch.equal(grown[key], ended[key]) for key in ended)
+    train(labelled)
+    losses = [m["loss/view_affordance"] for m in _metrics(labelled.out)]
+    assert len(losses) == 4 and all(v > 0 for v in losses) and losses[-1] < losses[0]
+
+
 def test_train_iteration_takes_exactly_one_step_and_hooks_do_the_rest(tiny_train_config):
     config = tiny_train_config(steps=4, checkpoint_every=2)
     trainer = Trainer(config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))

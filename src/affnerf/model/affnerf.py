@@ -13,7 +13,7 @@ from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.model.resnet import CodeEncoder
 from affnerf.model.triplane import PlaneGenerator, sample_planes
 
-__all__ = ["AffNeRF", "Codes", "RayOutputs"]
+__all__ = ["AffNeRF", "Codes", "LabelledCodes", "RayOutputs"]
 
 
 @dataclass
@@ -22,6 +22,14 @@ class Codes:
 
     shape: torch.Tensor
     appearance: torch.Tensor
+
+
+@dataclass
+class LabelledCodes(Codes):
+    """Codes with the shape encoder's pixel logits of the encoded crops, (B, V, C, S / 4, S / 4): what a model
+    with ``view_affordance_weight`` > 0 encodes while training."""
+
+    view_logits: torch.Tensor
 
 
 class AffNeRF(ConditionedNeRF):
@@ -40,7 +48,8 @@ class AffNeRF(ConditionedNeRF):
 
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
         super().__init__(config, num_classes)
-        self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width)
+        label_classes = num_classes if config.view_affordance_weight > 0 else 0
+        self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width, label_classes)
         self.appearance_encoder = CodeEncoder(config.code_dim, config.encoder_width)
         self.planes: PlaneGenerator | None = None
         trunk_dim = config.code_dim
@@ -55,13 +64,29 @@ class AffNeRF(ConditionedNeRF):
         return Codes(self.shape_encoder(images), self.appearance_encoder(images))
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Codes:
-        """Codes of B objects from V views each (B, V, 3, S, S): the mean of the views' codes.
+        """Codes of B objects from V views each (B, V, 3, S, S): the mean of the views' codes; while training a
+        model with a pixel-labelling head, :class:`LabelledCodes` with the crops' logits.
 
         The cameras are not used: AFF-NeRF needs no input pose.
         """
         b, v = images.shape[:2]
-        codes = self.encode(images.reshape(b * v, *images.shape[2:]))
-        return Codes(codes.shape.reshape(b, v, -1).mean(1), codes.appearance.reshape(b, v, -1).mean(1))
+        flat = images.reshape(b * v, *images.shape[2:])
+        shape, logits = self.shape_encoder.encode(flat, labels=self.training)
+        shape = shape.reshape(b, v, -1).mean(1)
+        appearance = self.appearance_encoder(flat).reshape(b, v, -1).mean(1)
+        if logits is None:
+            return Codes(shape, appearance)
+        return LabelledCodes(shape, appearance, logits.reshape(b, v, *logits.shape[1:]))
+
+    def auxiliary_losses(
+        self, encoding: Codes, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
+    ) -> dict[str, torch.Tensor]:
+        """``loss/view_affordance``: ``view_affordance_weight`` x the cross-entropy of the shape encoder's pixel
+        labels (:func:`view_label_loss`) against ``input_labels`` (empty without the head or the labels)."""
+        if not isinstance(encoding, LabelledCodes) or input_labels is None or not input_labels.numel():
+            return {}
+        loss = view_label_loss(encoding.view_logits, input_labels)
+        return {"loss/view_affordance": self.config.view_affordance_weight * loss}
 
     def condition(self, encoding: Codes, ray_object: torch.Tensor) -> Condition:
         """Each point takes its object's shape code (trunk) and appearance code (colour head).
@@ -100,3 +125,12 @@ class AffNeRF(ConditionedNeRF):
         if memo is None or memo[0] is not shape or memo[1] != key:
             memo = self._planes_memo = (shape, key, self.planes(shape))
         return memo[2]
+
+
+def view_label_loss(logits: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+    """Mean cross-entropy of pixel logits (B, V, C, h, w), upsampled (bilinear) to the labels' (B, V, S, S) size,
+    against those integer labels; 0-d."""
+    b, v, c = logits.shape[:3]
+    size = labels.shape[-2:]
+    flat = torch.nn.functional.interpolate(logits.reshape(b * v, c, *logits.shape[-2:]), size=size, mode="bilinear")
+    return torch.nn.functional.cross_entropy(flat, labels.reshape(b * v, *size).long())

@@ -50,12 +50,15 @@ class ConditionedNeRF(nn.Module, ABC):
             poses: (B, V, 4, 4) the views' camera-to-world poses.
         """
 
-    def auxiliary_losses(self, encoding: Any, input_depth: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+    def auxiliary_losses(
+        self, encoding: Any, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
+    ) -> dict[str, torch.Tensor]:
         """Training losses the model adds to the rendering loss, by log name (each 0-d; none by default).
 
         Args:
             encoding: what :meth:`encode_views` returned for the step's input views.
             input_depth: (B, V, S, S) true z-depth of the input crops (m, 0 = no surface), when the data has it.
+            input_labels: (B, V, S, S) true affordance ids of the input crops' pixels, when the data has them.
         """
         return {}
 

@@ -64,6 +64,12 @@ class ModelConfig:
             truncated distance to the true surface, ``TrainConfig.point_distance_weight``), so free space near a
             thin part or inside a hollow object carries how far the surface is, not only that it is outside; the
             ``small`` preset's field and the shipped model's.
+        view_affordance_weight: AFF-NeRF only, beyond the paper: when > 0 its shape encoder also labels the pixels
+            of its input crop (a 1x1 convolution over the four stages' features,
+            :class:`affnerf.model.resnet.CodeEncoder`), and this weight times that labelling's cross-entropy
+            against the crop's true affordance map joins the training loss (``loss/view_affordance``), so the
+            encoder is taught to find small parts in the image (a pen's cap, a cabinet's pull), not only the
+            object's overall shape. The head serves training only; 0 (the paper): no head.
         plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
         plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
@@ -91,6 +97,7 @@ class ModelConfig:
     occupancy_density: float = 5.0
     conditioning: Literal["concat", "film", "triplane"] = "concat"
     geometry: Literal["density", "sdf"] = "density"
+    view_affordance_weight: float = 0.0
     plane_resolution: int = 64
     plane_channels: int = 16
 

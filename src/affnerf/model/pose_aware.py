@@ -122,7 +122,10 @@ class PoseAwareNeRF(ConditionedNeRF):
         )
 
     def auxiliary_losses(
-        self, encoding: PoseAwareCodes, input_depth: torch.Tensor | None = None
+        self,
+        encoding: PoseAwareCodes,
+        input_depth: torch.Tensor | None = None,
+        input_labels: torch.Tensor | None = None,
     ) -> dict[str, torch.Tensor]:
         """``loss/camera``: the camera head against the true input cameras (empty without them)."""
         if encoding.true_camera is None:

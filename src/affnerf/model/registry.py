@@ -45,11 +45,13 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
 
     Raises:
         ValueError: for a kind no class is registered under.
-        AffnerfError: for ``triplane`` conditioning of another kind than ``affnerf`` (only AFF-NeRF's shape code
-            can be decoded into planes).
+        AffnerfError: for ``triplane`` conditioning or a ``view_affordance_weight`` of another kind than
+            ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes, and only its encoder labels pixels).
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
     if config.conditioning == "triplane" and config.kind != "affnerf":
         raise AffnerfError(f"triplane conditioning decodes AFF-NeRF's shape code; a {config.kind} model has none")
+    if config.view_affordance_weight > 0 and config.kind != "affnerf":
+        raise AffnerfError(f"--model.view-affordance-weight labels AFF-NeRF's input crops, not a {config.kind} model's")
     return MODEL_KINDS[config.kind](config, num_classes)

@@ -73,20 +73,39 @@ class ResNet18(nn.Module):
         return feats
 
 
+def stacked_features(feats: list[torch.Tensor]) -> torch.Tensor:
+    """Every stage's feature map resized (bilinear) to the first stage's size and stacked along channels:
+    [(B, C_i, H_i, W_i)] -> (B, sum C_i, H_0, W_0)."""
+    size = feats[0].shape[-2:]
+    resized = [f if f.shape[-2:] == size else nn.functional.interpolate(f, size=size, mode="bilinear") for f in feats]
+    return torch.cat(resized, dim=1)
+
+
 class CodeEncoder(nn.Module):
-    """An image to a global code: ResNet18, global average pooling, a linear layer.
+    """An image to a global code: ResNet18, global average pooling, a linear layer; optionally also per-pixel
+    class logits of the image (a 1x1 convolution over all four stages' features, :func:`stacked_features`).
 
     Args:
         code_dim: size of the code (32 in the paper).
         width: ResNet18 channel multiplier.
+        label_classes: classes of the pixel labelling head (0: no head, the paper's encoder).
     """
 
-    def __init__(self, code_dim: int = 32, width: float = 1.0) -> None:
+    def __init__(self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0) -> None:
         super().__init__()
         self.backbone = ResNet18(width)
         self.head = nn.Linear(self.backbone.channels[-1], code_dim)
+        self.label_head = nn.Conv2d(sum(self.backbone.channels), label_classes, 1) if label_classes else None
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
         """(B, 3, H, W) images in [0, 1] -> (B, code_dim) codes."""
-        feat = self.backbone(images)[-1]
-        return self.head(feat.mean(dim=(2, 3)))
+        return self.encode(images, labels=False)[0]
+
+    def encode(self, images: torch.Tensor, labels: bool = True) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """(B, 3, H, W) images in [0, 1] -> (B, code_dim) codes and, with ``labels`` and a labelling head,
+        (B, label_classes, H / 4, W / 4) pixel logits (else None)."""
+        feats = self.backbone(images)
+        code = self.head(feats[-1].mean(dim=(2, 3)))
+        if not labels or self.label_head is None:
+            return code, None
+        return code, self.label_head(stacked_features(feats))

@@ -223,6 +223,8 @@ def check_options(config: TrainConfig) -> None:
         )
     if config.points_weight_final >= 0 and config.points_weight <= 0:
         raise AffnerfError("--points-weight-final needs --points-weight > 0 (the weight the schedule starts from)")
+    if config.model.view_affordance_weight > 0 and config.input_jitter > 0:
+        raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

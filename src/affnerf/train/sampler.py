@@ -32,6 +32,8 @@ class RayBatch:
         input_poses: (B, V, 4, 4) the encoded views' camera-to-world poses.
         input_depth: (B, V, S, S) true z-depth (m, 0 = no surface) at the crops' pixels (GSNeRF's source-view depth
             supervision), the nearest pixel of the cached depth map.
+        input_labels: (B, V, S, S) true affordance ids at the crops' pixels (0 = background), the nearest pixel of
+            the cached label map (AFF-NeRF's input-view labelling, ``ModelConfig.view_affordance_weight``).
         ray_object: (R,) index of each ray's object in ``images``.
         origins: (R, 3) ray origins.
         dirs: (R, 3) ray directions (unit length along the camera axis).
@@ -48,6 +50,7 @@ class RayBatch:
     input_intrinsics: torch.Tensor
     input_poses: torch.Tensor
     input_depth: torch.Tensor
+    input_labels: torch.Tensor
     ray_object: torch.Tensor
     origins: torch.Tensor
     dirs: torch.Tensor
@@ -173,8 +176,10 @@ class RaySampler:
             views = other_views(self.rng, len(obj), enc, int(count))
             fg = self.rng.random(int(count)) < self.foreground_fraction
             u, v = draw_pixels(self.rng, obj, views, fg)
-            crop_depth = _input_depth(obj, enc)
-            images.append((np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth))
+            crop_depth, crop_labels = _input_maps(obj, enc)
+            images.append(
+                (np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)
+            )
             enc_views.append(enc)
             parts.append((slot, obj, views, u, v))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
@@ -189,11 +194,16 @@ class RaySampler:
         self._order = self._epoch_order(self.epoch)
 
 
-def _input_depth(obj: ObjectFrames, enc: np.ndarray) -> np.ndarray:
-    """(V, S, S) depth of each encoder view's crop (V may be 0: a method fitted without input views)."""
+def _input_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(V, S, S) depth and (V, S, S) affordance ids of each encoder view's crop (V may be 0: a method fitted
+    without input views)."""
     size = obj.crops.shape[1]
-    crops = [resample_to_crop(obj.depth[e], obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
-    return np.stack(crops) if crops else np.zeros((0, size, size), np.float32)
+
+    def crops(maps: np.ndarray, dtype: type) -> np.ndarray:
+        seen = [resample_to_crop(maps[e], obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
+        return np.stack(seen).astype(dtype) if seen else np.zeros((0, size, size), dtype)
+
+    return crops(obj.depth, np.float32), crops(obj.labels, np.uint8)
 
 
 def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
@@ -219,6 +229,7 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         input_intrinsics=torch.from_numpy(np.stack([i[1] for i in images])).float(),
         input_poses=torch.from_numpy(np.stack([i[2] for i in images])).float(),
         input_depth=torch.from_numpy(np.stack([i[3] for i in images])).float(),
+        input_labels=torch.from_numpy(np.stack([i[4] for i in images])).long(),
         ray_object=torch.from_numpy(np.concatenate(ray_object)).long(),
         origins=origins.float(),
         dirs=dirs.float(),

@@ -42,27 +42,34 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
             raise AffnerfError(f"{source}: --init-from names a folder with no checkpoints/step_*.pt")
         path = found[-1]
     data = load_checkpoint(path)
-    growing = grows_into_film(data, model.config)
-    check_compatible(
-        data, dataclasses.replace(model.config, conditioning="concat") if growing else model.config, num_classes, path
-    )
-    missing, unexpected = model.load_state_dict(data["model"], strict=not growing)
-    if unexpected or any(".film." not in key for key in missing):
+    base, added = grown_config(data, model.config)
+    check_compatible(data, base, num_classes, path)
+    missing, unexpected = model.load_state_dict(data["model"], strict=not added)
+    if unexpected or any(not any(part in key for part in added) for key in missing):
         raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
-    if growing:
-        log.info("%s: a concatenating field grown into FiLM; its modulation starts at zero", path)
+    if added:
+        log.info("%s: grown by %s, which start where they change nothing", path, ", ".join(added))
     return path
 
 
-def grows_into_film(data: dict[str, Any], config: ModelConfig) -> bool:
-    """True when the checkpoint's field concatenates its code and ``config`` asks for FiLM (that the rest of the
-    architecture matches is :func:`check_compatible`'s business).
+def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig, tuple[str, ...]]:
+    """The configuration a checkpoint must match (:func:`check_compatible`) for ``config``'s model to start from
+    it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
+    concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
+    pixel-labelling head the checkpoint lacks.
 
-    Such a start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), so the grown
-    model computes what the checkpoint did, and training then learns the modulation from there.
+    Both starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
+    labelling head only adds a training loss, so the grown model computes what the checkpoint did.
     """
     saved = data.get("model_config", {})
-    return config.conditioning == "film" and saved.get("conditioning", "concat") == "concat"
+    added: list[str] = []
+    if config.conditioning == "film" and saved.get("conditioning", "concat") == "concat":
+        config = dataclasses.replace(config, conditioning="concat")
+        added.append(".film.")
+    if config.view_affordance_weight > 0 and not saved.get("view_affordance_weight", 0.0):
+        config = dataclasses.replace(config, view_affordance_weight=0.0)
+        added.append(".label_head.")
+    return config, tuple(added)
 
 
 def prepare_run_folder(config: TrainConfig, ctx: dist_utils.Context) -> Path | None:

@@ -160,7 +160,7 @@ class TrainingPass(torch.nn.Module):
             encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
         )
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
-        auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v])
+        auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v], batch.input_labels[:, :v])
         if self.consistency_weight > 0:
             other = m.encode_views(batch.images[:, v:], batch.input_intrinsics[:, v:], batch.input_poses[:, v:])
             agreement = code_consistency(encoding.shape, other.shape) + code_consistency(
