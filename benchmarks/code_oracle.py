@@ -22,7 +22,7 @@ import torch
 
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
-from affnerf.eval.protocol import ProtocolConfig, choose_views, object_targets, view_order
+from affnerf.eval.protocol import ProtocolConfig, choose_views, object_targets, per_class_scores, view_order
 from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
 from affnerf.model.affnerf import Codes
 from affnerf.model.views import camera_rays, render_view
@@ -76,6 +76,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--checkpoint", type=Path, default=Path("src/affnerf/weights/affnerf-small.pt"))
     parser.add_argument("--split", default="val")
+    parser.add_argument("--categories", default="", help="comma-separated categories (default: all)")
     parser.add_argument("--per-category", type=int, default=2)
     parser.add_argument("--fit-views", type=int, default=10)
     parser.add_argument("--steps", type=int, default=200)
@@ -93,7 +94,9 @@ def main() -> None:
     n = len(dataset.affordance_classes)
     conf: dict[str, dict[str, np.ndarray]] = {"encoder": {}, "fitted": {}}
     start = time.perf_counter()
-    for entry in interleave_categories(dataset.objects(args.split), args.per_category):
+    wanted = set(filter(None, args.categories.split(",")))
+    entries = [e for e in dataset.objects(args.split) if not wanted or e.category in wanted]
+    for entry in interleave_categories(entries, args.per_category):
         obj = dataset.load_object(entry)
         inputs, targets = choose_views(len(obj), entry.id, protocol)
         fit_views = [v for v in view_order(len(obj), entry.id, 1) if v not in inputs + targets][: args.fit_views]
@@ -108,7 +111,11 @@ def main() -> None:
     result = {"settings": {k: str(v) for k, v in vars(args).items()}, "seconds": time.perf_counter() - start}
     for name, cats in conf.items():
         per = {c: segmentation_metrics(m)["mIoU"] for c, m in sorted(cats.items())}
-        result[name] = {"mIoU": float(np.mean(list(per.values()))), "per_category": per}
+        result[name] = {
+            "mIoU": float(np.mean(list(per.values()))),
+            "per_category": per,
+            "IoU_per_class": {c: per_class_scores(m)["IoU_per_class"] for c, m in sorted(cats.items())},
+        }
         print(name, round(result[name]["mIoU"], 3), {c: round(v, 3) for c, v in per.items()})
     args.out.write_text(json.dumps(result, indent=1))
 
