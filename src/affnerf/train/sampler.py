@@ -176,7 +176,7 @@ class RaySampler:
             views = other_views(self.rng, len(obj), enc, int(count))
             fg = self.rng.random(int(count)) < self.foreground_fraction
             u, v = draw_pixels(self.rng, obj, views, fg)
-            crop_depth, crop_labels = _input_maps(obj, enc)
+            crop_depth, crop_labels = crop_maps(obj, enc)
             images.append(
                 (np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)
             )
@@ -194,7 +194,7 @@ class RaySampler:
         self._order = self._epoch_order(self.epoch)
 
 
-def _input_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def crop_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(V, S, S) depth and (V, S, S) affordance ids of each encoder view's crop (V may be 0: a method fitted
     without input views)."""
     size = obj.crops.shape[1]
