@@ -31,6 +31,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--cache-dir", type=Path, required=True)
     parser.add_argument("--split", default="val")
+    parser.add_argument("--image-scale", type=float, default=0.25, help="the run's image_scale (small preset: 0.25)")
     parser.add_argument("--every", type=int, default=5, help="label every N-th view of each object")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args()
@@ -42,7 +43,7 @@ def main() -> None:
     n, size = len(ds.affordance_classes), model.config.encoder_resolution
     conf: dict[str, np.ndarray] = {}
     for entry in ds.objects(args.split):
-        frames = cached_frames(ds.load_object(entry), args.cache_dir, 0.25, size)  # the small preset's frames
+        frames = cached_frames(ds.load_object(entry), args.cache_dir, args.image_scale, size)
         views = np.arange(0, len(frames), args.every)
         _, labels = crop_maps(frames, views)
         images = torch.from_numpy(np.asarray(frames.crops[views])).permute(0, 3, 1, 2).float() / 255.0

@@ -60,23 +60,24 @@ class AffNeRF(ConditionedNeRF):
         self._planes_memo: tuple[torch.Tensor, tuple[int, int, bool], torch.Tensor] | None = None
 
     def encode(self, images: torch.Tensor) -> Codes:
-        """(B, 3, S, S) object crops in [0, 1] -> their codes."""
-        return Codes(self.shape_encoder(images), self.appearance_encoder(images))
+        """(B, 3, S, S) object crops in [0, 1] -> their codes; while training a model with a pixel-labelling head,
+        :class:`LabelledCodes` with the crops' (B, C, S / 4, S / 4) logits."""
+        shape, logits = self.shape_encoder.encode(images, labels=self.training)
+        appearance = self.appearance_encoder(images)
+        return Codes(shape, appearance) if logits is None else LabelledCodes(shape, appearance, logits)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Codes:
-        """Codes of B objects from V views each (B, V, 3, S, S): the mean of the views' codes; while training a
-        model with a pixel-labelling head, :class:`LabelledCodes` with the crops' logits.
+        """Codes of B objects from V views each (B, V, 3, S, S): the mean of the views' codes (with the views'
+        logits, (B, V, C, S / 4, S / 4), when :meth:`encode` gives them).
 
         The cameras are not used: AFF-NeRF needs no input pose.
         """
         b, v = images.shape[:2]
-        flat = images.reshape(b * v, *images.shape[2:])
-        shape, logits = self.shape_encoder.encode(flat, labels=self.training)
-        shape = shape.reshape(b, v, -1).mean(1)
-        appearance = self.appearance_encoder(flat).reshape(b, v, -1).mean(1)
-        if logits is None:
+        codes = self.encode(images.reshape(b * v, *images.shape[2:]))
+        shape, appearance = codes.shape.reshape(b, v, -1).mean(1), codes.appearance.reshape(b, v, -1).mean(1)
+        if not isinstance(codes, LabelledCodes):
             return Codes(shape, appearance)
-        return LabelledCodes(shape, appearance, logits.reshape(b, v, *logits.shape[1:]))
+        return LabelledCodes(shape, appearance, codes.view_logits.reshape(b, v, *codes.view_logits.shape[1:]))
 
     def auxiliary_losses(
         self, encoding: Codes, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
