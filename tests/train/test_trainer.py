@@ -156,6 +156,22 @@ def test_init_from_grows_a_pixel_labelling_head_and_training_logs_its_loss(tiny_
     assert len(losses) == 4 and all(v > 0 for v in losses) and losses[-1] < losses[0]
 
 
+def test_init_from_may_change_the_encoders_crop_side_and_trains_at_the_new_one(tiny_train_config, tmp_path):
+    first = tiny_train_config(out=tmp_path / "small_crops", steps=2, checkpoint_every=2)
+    train(first)
+    ended = torch.load(first.out / "checkpoints" / "step_00000002.pt", weights_only=True)["model"]
+    side = first.model.encoder_resolution + 16
+    larger = replace(first, out=tmp_path / "larger_crops", steps=2, init_from=first.out)
+    larger = replace(larger, model=replace(larger.model, encoder_resolution=side))
+    trainer = Trainer(larger, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    assert all(torch.equal(value, ended[key]) for key, value in trainer.state.model.state_dict().items())
+    assert trainer.train_iteration(0)["loss/total"] > 0
+    train(replace(larger, out=tmp_path / "larger_run"))
+    saved = torch.load(tmp_path / "larger_run" / "checkpoints" / "step_00000002.pt", weights_only=False)
+    assert saved["model_config"]["encoder_resolution"] == side
+
+
 def test_train_iteration_takes_exactly_one_step_and_hooks_do_the_rest(tiny_train_config):
     config = tiny_train_config(steps=4, checkpoint_every=2)
     trainer = Trainer(config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))

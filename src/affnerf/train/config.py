@@ -108,9 +108,10 @@ class TrainConfig:
         init_from: start from the weights of this checkpoint (a ``.pt`` file, the shipped model's included, or a
             run folder: its last checkpoint) instead of the seed's initialisation; the architecture must match,
             except that a concatenating field may start a FiLM one (``--model.conditioning film``; exact, the
-            modulation starts at zero). The optimiser, the step count and the learning-rate schedule start afresh
-            (fine-tuning, or a second stage with its own schedule). Ignored when resuming (the run's own checkpoint
-            wins).
+            modulation starts at zero), a model without the pixel-labelling head one with it, and the encoders'
+            crop side (``--model.encoder-resolution``) may differ (they pool globally). The optimiser, the step
+            count and the learning-rate schedule start afresh (fine-tuning, or a second stage with its own
+            schedule). Ignored when resuming (the run's own checkpoint wins).
     """
 
     data: Path

@@ -56,9 +56,11 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     """The configuration a checkpoint must match (:func:`check_compatible`) for ``config``'s model to start from
     it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
     concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
-    pixel-labelling head the checkpoint lacks.
+    pixel-labelling head the checkpoint lacks. ``config`` may also crop the encoders' input to another side than the
+    checkpoint did (``encoder_resolution``): every encoder ends in global pooling, so its weights fit any side, but
+    the codes they give change until training adapts them.
 
-    Both starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
+    The two grown starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
     labelling head only adds a training loss, so the grown model computes what the checkpoint did.
     """
     saved = data.get("model_config", {})
@@ -69,6 +71,9 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     if config.view_affordance_weight > 0 and not saved.get("view_affordance_weight", 0.0):
         config = dataclasses.replace(config, view_affordance_weight=0.0)
         added.append(".label_head.")
+    side = saved.get("encoder_resolution", ModelConfig.encoder_resolution)
+    if config.encoder_resolution != side:  # the encoders pool globally: the same weights read any crop side
+        config = dataclasses.replace(config, encoder_resolution=side)
     return config, tuple(added)
 
 
