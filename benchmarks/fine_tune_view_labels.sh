@@ -6,7 +6,7 @@
 # objects), then val40 (which keeps per-class IoU), and the head's own labelling of validation crops
 # (benchmarks/view_label_head.py). The stage without the head is fine_tune_outer_surface.sh's "outer" stage: pass
 # its run folder as PLAIN_RUN to reuse it.
-#   DATA=... [WORK=...] [STEPS=14000] [W_VIEW=0.1] [PLAIN_RUN=...] benchmarks/fine_tune_view_labels.sh
+#   DATA=... [WORK=...] [STEPS=14000] [W_VIEW=0.1] [PLAIN_RUN=...] [INIT=...] benchmarks/fine_tune_view_labels.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -16,21 +16,16 @@ export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 mkdir -p "$W"
-STAGE=(--init-from src/affnerf/weights/affnerf-small.pt --optim.lr 2e-4 --optim.lr-final 2e-5)
-
-stage() {  # stage NAME [TRAIN OPTIONS...]: the further stage W/NAME, then calibrated
-    local name=$1
-    shift
-    .venv/bin/affnerf train --data "$DATA" --out "$W/$name" --config small --steps "$STEPS" --device cpu \
-        --checkpoint-every 2000 --keep-checkpoints 100 --val-every 0 --no-progress --cache-dir "$W/cache" \
-        "${STAGE[@]}" "$@"
-    .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
-}
+# the weights shipped when this ran (version-3 point sets; replaced since), unless INIT names others
+SHIPPED="${INIT:-$W/shipped_v3.pt}"
+[ -f "$SHIPPED" ] || git show ab24f38:src/affnerf/weights/affnerf-small.pt > "$SHIPPED"
+SAVED=(--checkpoint-every 2000 --keep-checkpoints 100 --val-every 0)
 
 warm_cache "$W/cache"
 PLAIN="${PLAIN_RUN:-$W/plain}"
-[ -n "${PLAIN_RUN:-}" ] || stage plain > "$W/plain.log" 2>&1 &
-stage view_labels --model.view-affordance-weight "${W_VIEW:-0.1}" > "$W/view_labels.log" 2>&1 &
+[ -n "${PLAIN_RUN:-}" ] || calibrated_stage plain "$SHIPPED" "$STEPS" "$W/cache" "${SAVED[@]}" > "$W/plain.log" 2>&1 &
+calibrated_stage view_labels "$SHIPPED" "$STEPS" "$W/cache" "${SAVED[@]}" \
+    --model.view-affordance-weight "${W_VIEW:-0.1}" > "$W/view_labels.log" 2>&1 &
 wait
 val40 plain "$PLAIN" &
 val40 view_labels "$W/view_labels" &

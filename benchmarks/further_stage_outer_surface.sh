@@ -23,21 +23,12 @@ BEFORE="${BEFORE:-$W/shipped_v3.pt}"
 [ -f "$FIRST" ] || git show 29fc4da:benchmarks/candidates/affnerf-small-sdf-v4.pt > "$FIRST"
 [ -f "$BEFORE" ] || git show ab24f38:src/affnerf/weights/affnerf-small.pt > "$BEFORE"
 
-# stage NAME STEPS CACHE [TRAIN OPTIONS...]: the further stage W/NAME, then its calibration
-stage() {
-    local name=$1 steps=$2 cache=$3
-    shift 3
-    .venv/bin/affnerf train --data "$DATA" --out "$W/$name" --config small --steps "$steps" --init-from "$FIRST" \
-        --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" --device cpu --no-progress "$@"
-    .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
-}
-
 if [ "${SKIP_TRAINING:-0}" != 1 ]; then
     # beside it, the same stage with 96-pixel encoder crops (a step costs about 5 % more, so 18,100 steps), on a
     # cache of its own (the crops are cached at their side)
     warm_cache "$W/cache96" --model.encoder-resolution 96
-    stage v4_stage2 19000 "$CACHE" &
-    stage v4_stage2_96 18100 "$W/cache96" --model.encoder-resolution 96 &
+    calibrated_stage v4_stage2 "$FIRST" 19000 "$CACHE" &
+    calibrated_stage v4_stage2_96 "$FIRST" 18100 "$W/cache96" --model.encoder-resolution 96 &
     wait
 fi
 rm -rf "$W/val40_shipped" "$W/val40_v4_stage2" "$W/val40_v4_stage2_96"

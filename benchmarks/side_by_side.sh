@@ -24,6 +24,17 @@ timed_small_run() {
         --no-progress "$@"
 }
 
+# calibrated_stage NAME INIT STEPS CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the weights INIT (a fresh
+# Adam, 2e-4 -> 2e-5 over STEPS steps, frames and points in CACHE), then its mesh level calibrated on 32 validation
+# objects (fine_tune_view_labels.sh, further_stage_outer_surface.sh).
+calibrated_stage() {
+    local name=$1 init=$2 steps=$3 cache=$4
+    shift 4
+    .venv/bin/affnerf train --data "$DATA" --out "$W/$name" --config small --steps "$steps" --init-from "$init" \
+        --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" --device cpu --no-progress "$@"
+    .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
+}
+
 # score_runs NAME...: every checkpoint of each W/NAME on the ladder's validation objects, the runs side by side;
 # writes W/score_NAME.json and all of them in one W/scores.json (the results file).
 score_runs() {

@@ -103,8 +103,11 @@ class ModelConfig:
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint
-#: may be resumed or loaded with other values of these.
+#: may be resumed or loaded with other values of these. ``encoder_resolution`` is one: every encoder pools globally
+#: (or samples its feature maps at projected points), so the same weights read crops of any side, though the codes
+#: they give change until a further stage adapts them.
 NON_ARCHITECTURE_FIELDS = (
+    "encoder_resolution",
     "num_coarse",
     "num_fine",
     "near",

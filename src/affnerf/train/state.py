@@ -56,11 +56,10 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     """The configuration a checkpoint must match (:func:`check_compatible`) for ``config``'s model to start from
     it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
     concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
-    pixel-labelling head the checkpoint lacks. ``config`` may also crop the encoders' input to another side than the
-    checkpoint did (``encoder_resolution``): every encoder ends in global pooling, so its weights fit any side, but
-    the codes they give change until training adapts them.
+    pixel-labelling head the checkpoint lacks. (Fields that do not change the weights, such as the encoders' crop
+    side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
 
-    The two grown starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
+    Both starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
     labelling head only adds a training loss, so the grown model computes what the checkpoint did.
     """
     saved = data.get("model_config", {})
@@ -71,9 +70,6 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     if config.view_affordance_weight > 0 and not saved.get("view_affordance_weight", 0.0):
         config = dataclasses.replace(config, view_affordance_weight=0.0)
         added.append(".label_head.")
-    side = saved.get("encoder_resolution", ModelConfig.encoder_resolution)
-    if config.encoder_resolution != side:  # the encoders pool globally: the same weights read any crop side
-        config = dataclasses.replace(config, encoder_resolution=side)
     return config, tuple(added)
 
 
