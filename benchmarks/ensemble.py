@@ -27,8 +27,7 @@ from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.registry import MethodSpec, register_method
 from affnerf.eval.runner import EvalConfig, run_eval
 from affnerf.model.base import ConditionedNeRF
-from affnerf.model.encoding import positional_encoding
-from affnerf.model.field import ConditionalField, FieldOutput, PointGeometry, laplace_density, linear_with_code
+from affnerf.model.field import ConditionalField, FieldOutput, PointGeometry, laplace_density
 from affnerf.model.raymarch import Condition, FieldRenderer
 from affnerf.predict.loading import LoadedModel, load_model
 
@@ -48,16 +47,6 @@ def mean_log_probabilities(logits: Sequence[torch.Tensor]) -> torch.Tensor:
     return torch.logsumexp(stacked, dim=0) - math.log(len(logits))
 
 
-def member_output(field: ConditionalField, points, dirs, shape_code, appearance_code):
-    """One member's (N,) density, (N,) signed distance or None, (N, 3) colour and (N, C - 1) logits."""
-    h = field.trunk(points, shape_code)
-    q = field.feature(h)
-    view = torch.cat([q, positional_encoding(dirs, field.pe_dir)], dim=-1)
-    rgb = torch.sigmoid(field.color[2](torch.relu(linear_with_code(field.color[0], view, appearance_code))))
-    density, distance = field.density_and_distance(h)
-    return density, distance, rgb, field.affordance(q)
-
-
 class EnsembleField(nn.Module):
     """The members' fields of one stage as one field; it takes a tuple of per-member conditionings wherever a
     :class:`ConditionalField` takes one. ``combine``: ``density`` or ``distance`` (module docstring)."""
@@ -74,11 +63,10 @@ class EnsembleField(nn.Module):
         return laplace_density(torch.stack(distances).mean(0), beta)
 
     def forward(self, points, dirs, shape_codes: tuple, appearance_codes: tuple) -> FieldOutput:
-        members = zip(self.members, shape_codes, appearance_codes, strict=True)
-        outs = [member_output(f, points, dirs, s, a) for f, s, a in members]
-        sigma = self._density([o[0] for o in outs], [o[1] for o in outs])
-        rgb = torch.stack([o[2] for o in outs]).mean(0)
-        return FieldOutput(sigma=sigma, rgb=rgb, logits=mean_log_probabilities([o[3] for o in outs]))
+        outs = [f(points, dirs, s, a) for f, s, a in zip(self.members, shape_codes, appearance_codes, strict=True)]
+        sigma = self._density([o.sigma for o in outs], [o.distance for o in outs])
+        rgb = torch.stack([o.rgb for o in outs]).mean(0)
+        return FieldOutput(sigma=sigma, rgb=rgb, logits=mean_log_probabilities([o.logits for o in outs]))
 
     def supervised(self, points, shape_codes: tuple) -> PointGeometry:
         outs = [f.supervised(points, s) for f, s in zip(self.members, shape_codes, strict=True)]

@@ -116,11 +116,13 @@ class FieldOutput:
         rgb: (..., 3) colour in [0, 1].
         logits: (..., C - 1) affordance logits over the object classes (class 0, background, is rendered from
             transmittance, see :func:`affnerf.rendering.volume.render_affordance`).
+        distance: (..., ) signed distance (metres) the density comes from, for a signed-distance field; else None.
     """
 
     sigma: torch.Tensor
     rgb: torch.Tensor
     logits: torch.Tensor
+    distance: torch.Tensor | None = None
 
 
 class PointGeometry(NamedTuple):
@@ -257,7 +259,8 @@ class ConditionalField(nn.Module):
         view = torch.cat([q, positional_encoding(dirs, self.pe_dir)], dim=-1)
         hidden = linear_with_code(self.color[0], view, appearance_code)
         rgb = torch.sigmoid(self.color[2](torch.relu(hidden)))
-        return FieldOutput(sigma=self.density_from(h), rgb=rgb, logits=self.affordance(q))
+        sigma, distance = self.density_and_distance(h)
+        return FieldOutput(sigma=sigma, rgb=rgb, logits=self.affordance(q), distance=distance)
 
     def density_only(self, points: torch.Tensor, shape_code: Code) -> torch.Tensor:
         """(N,) density alone, for mesh extraction and occupancy grids."""
