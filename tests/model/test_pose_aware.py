@@ -91,6 +91,23 @@ def test_projection_uses_the_predicted_camera_never_the_given_pose():
     torch.testing.assert_close(a.world_to_camera, camera_from_params(a.camera.detach(), 32)[0])
 
 
+def test_the_oracle_projects_with_the_given_camera_and_falls_back_to_the_predicted_one():
+    torch.manual_seed(0)
+    model = PoseAwareNeRF(replace(TINY, projection_camera="given"), 4).eval()
+    images, intrinsics, poses = _posed_inputs(1)
+    other = poses.clone()
+    other[..., :3, 3] *= 1.5
+    a, b = model.encode_views(images, intrinsics, poses), model.encode_views(images, intrinsics, other)
+    alone = model.encode(images[:, 0])
+    torch.testing.assert_close(a.world_to_camera, camera_from_params(a.true_camera, 32)[0])
+    torch.testing.assert_close(alone.world_to_camera, camera_from_params(alone.camera.detach(), 32)[0])
+    points = torch.rand(30, 3) * 0.3 - 0.15
+    rays, obj = torch.arange(30), torch.zeros(30, dtype=torch.long)
+    trunk_a, _ = model.condition(a, obj)(points, rays)
+    trunk_b, _ = model.condition(b, obj)(points, rays)
+    assert not torch.allclose(trunk_a, trunk_b)  # the local codes read the image where each camera projects
+
+
 def test_the_camera_loss_trains_only_the_camera_head_and_the_encoder_below_it():
     torch.manual_seed(1)
     model = PoseAwareNeRF(TINY, 4)

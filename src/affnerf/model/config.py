@@ -70,6 +70,11 @@ class ModelConfig:
             against the crop's true affordance map joins the training loss (``loss/view_affordance``), so the
             encoder is taught to find small parts in the image (a pen's cap, a cabinet's pull), not only the
             object's overall shape. The head serves training only; 0 (the paper): no head.
+        projection_camera: ``pose-aware`` only: the camera its query points are projected with to read the image's
+            features, ``predicted`` (the camera head's, always: a photo has no pose) or ``given`` (the input view's
+            true camera wherever one is given, in training and in a posed evaluation; the predicted one otherwise).
+            ``given`` is an oracle, for measuring what pixel-aligned features are worth with a right camera
+            (benchmarks/pose_oracle.py); the camera head is trained either way.
         plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
         plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
@@ -98,6 +103,7 @@ class ModelConfig:
     conditioning: Literal["concat", "film", "triplane"] = "concat"
     geometry: Literal["density", "sdf"] = "density"
     view_affordance_weight: float = 0.0
+    projection_camera: Literal["predicted", "given"] = "predicted"
     plane_resolution: int = 64
     plane_channels: int = 16
 
@@ -117,4 +123,5 @@ NON_ARCHITECTURE_FIELDS = (
     "surface_density",
     "surface_optical_depth",
     "occupancy_density",
+    "projection_camera",
 )

@@ -9,9 +9,10 @@ query point is projected with that predicted camera, the shape encoder's multi-s
 (PixelNeRF's way), and a small network turns the feature and the point's position in the predicted camera frame
 into a local code that joins the global codes in the trunk and in the colour head.
 
-The camera used for projection is always the predicted one, detached: in training too, so that the fields learn
-to read features through the same imperfect camera they get at prediction. The true camera only supervises the
-camera head (:meth:`PoseAwareNeRF.auxiliary_losses`). Prediction therefore needs no pose, as AFF-NeRF's.
+The camera used for projection is the predicted one, detached: in training too, so that the fields learn to read
+features through the same imperfect camera they get at prediction. The true camera only supervises the camera head
+(:meth:`PoseAwareNeRF.auxiliary_losses`). Prediction therefore needs no pose, as AFF-NeRF's. With
+``projection_camera="given"`` (an oracle for benchmarks) the true camera projects wherever it is given.
 """
 
 from __future__ import annotations
@@ -98,8 +99,8 @@ class PoseAwareNeRF(ConditionedNeRF):
         return self._encode(images[:, None], None)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> PoseAwareCodes:
-        """Encoding of B objects from V views each (B, V, 3, S, S). The given cameras are kept only as the camera
-        head's training target: projection always uses the predicted ones."""
+        """Encoding of B objects from V views each (B, V, 3, S, S). The given cameras are the camera head's training
+        target; they also project the query points only with ``projection_camera="given"``."""
         true = params_from_camera(poses.float(), intrinsics.float(), images.shape[-1])
         return self._encode(images, true)
 
@@ -109,7 +110,10 @@ class PoseAwareNeRF(ConditionedNeRF):
         stages = self.shape_backbone(flat)
         pooled = stages[-1].mean(dim=(2, 3))
         camera = self.camera_head(pooled)
-        w2c, intrinsics = camera_from_params(camera.detach(), size)
+        project = camera.detach()
+        if true_camera is not None and self.config.projection_camera == "given":
+            project = true_camera.reshape(camera.shape).to(camera.dtype)
+        w2c, intrinsics = camera_from_params(project, size)
         return PoseAwareCodes(
             shape=self.shape_head(pooled).reshape(b, v, -1).mean(1),
             appearance=self.appearance_encoder(flat).reshape(b, v, -1).mean(1),
