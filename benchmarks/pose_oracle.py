@@ -33,10 +33,10 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from PIL import Image
 
 from affnerf.data.dataset import Dataset, ObjectData, interleave_categories
 from affnerf.environment import describe_machine
+from affnerf.eval.protocol import resized
 from affnerf.eval.surface import sample_seed, score_mesh, true_samples
 from affnerf.fileio import write_json_atomic
 from affnerf.metrics.image import psnr
@@ -44,38 +44,22 @@ from affnerf.metrics.segmentation import confusion_matrix, mean_iou
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.inputs import dataset_views
 from affnerf.model.views import render_view
+from affnerf.objects.primitives import rotation
 from affnerf.predict.invert import InversionConfig, dataset_crop_target, invert
 from affnerf.predict.loading import LoadedModel, load_model
 from affnerf.predict.mesh import model_mesh
 from affnerf.predict.shipped import shipped_model
 
-
-def resized(image: np.ndarray, size: tuple[int, int], nearest: bool) -> np.ndarray:
-    """An (H, W[, 3]) image resized to (width, height): nearest for labels, box-averaged for colour."""
-    return np.asarray(Image.fromarray(image).resize(size, Image.NEAREST if nearest else Image.BOX))
-
-
 #: (1, 1, 4, 4) camera-to-canonical pose of an object's input view, from the view's true pose.
 CameraRule = Callable[[ObjectData, torch.Tensor], torch.Tensor]
-
-
-def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
-    """(3, 3) rotation by ``degrees`` about the unit (3,) ``axis`` (right-handed)."""
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    a = math.radians(degrees)
-    return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * (k @ k)
 
 
 def turned(c2w: np.ndarray, azimuth: float = 0.0, elevation: float = 0.0) -> np.ndarray:
     """(4, 4) camera-to-canonical pose moved about the canonical origin: turned ``azimuth`` degrees about +z, then
     raised ``elevation`` degrees (towards +z) about the horizontal axis perpendicular to its eye direction."""
-    turn = rotation(np.array([0.0, 0.0, 1.0]), azimuth)
-    eye = turn @ c2w[:3, 3]
-    side = np.cross(eye, [0.0, 0.0, 1.0])
-    raise_ = rotation(side / np.linalg.norm(side), elevation)
-    out = np.eye(4)
-    out[:3, :4] = raise_ @ turn @ c2w[:3, :4]
-    return out
+    turn = rotation((0.0, 0.0, 1.0), math.radians(azimuth))
+    side = np.cross(turn[:3, :3] @ c2w[:3, 3], [0.0, 0.0, 1.0])
+    return rotation(side, math.radians(elevation)) @ turn @ c2w
 
 
 def fit_rule(shipped: LoadedModel) -> CameraRule:
