@@ -191,3 +191,30 @@ def test_point_fields_of_a_model_on_a_gpu_take_points_from_the_cpu_as_mesh_extra
     volume = evaluate_grid(density, 6, 0.22, occupancy=grid)
     points = torch.rand(10, 3) * 0.4 - 0.2
     assert volume.shape == (6, 6, 6) and labels(points).device.type == "cuda"
+
+
+def test_a_shared_coarse_field_places_the_fine_samples_with_the_one_field_and_without_gradients():
+    torch.manual_seed(0)
+    own = AffNeRF(SMALL, num_classes=4)
+    shared = AffNeRF(replace(SMALL, coarse_field="shared"), num_classes=4)
+    assert shared.fine is None and not any(k.startswith("renderer.fine.") for k in shared.state_dict())
+    assert sum(p.numel() for p in shared.parameters()) < sum(p.numel() for p in own.parameters())
+    codes = shared.encode(torch.rand(2, 3, 32, 32))
+    origins = torch.tensor([[0.0, 0.0, 0.8], [0.05, 0.0, 0.8], [0.0, 0.8, 0.8]])
+    dirs = torch.tensor([[0.0, 0.0, -1.0]] * 3)  # the third passes beside the cube
+    bg = torch.full((3, 3), 0.5)
+    generator = torch.Generator().manual_seed(0)
+    coarse, fine = shared.render_rays(codes, torch.tensor([0, 1, 0]), origins, dirs, bg, True, generator)
+    assert not coarse.rgb.requires_grad and fine.rgb.requires_grad and fine.t.shape == (3, 16)
+    fine.rgb.sum().backward()
+    assert shared.coarse.trunk_layers[0].weight.grad.abs().sum() > 0  # the one field learns from the fine pass
+    # the coarse pass is the fine field's own rendering at the stratified samples
+    with torch.no_grad():
+        again, _ = shared.render_rays(codes, torch.tensor([0, 1, 0]), origins, dirs, bg)
+        far = shared.renderer.ray_bounds(origins[:2], dirs[:2])[1]
+        condition = shared.condition(codes, torch.tensor([0, 1]))
+        alone = shared.renderer._stage(
+            shared.coarse, again.t[:2], far, origins[:2], dirs[:2], torch.tensor([0, 1]), condition, bg[:2]
+        )
+    torch.testing.assert_close(again.rgb[:2], alone.rgb)
+    assert len(shared.point_geometry(codes, torch.tensor([0, 1]), torch.rand(2, 3) - 0.5)) == 1

@@ -85,6 +85,52 @@ def test_interrupted_and_resumed_run_ends_with_the_same_weights(tiny_train_confi
     assert a["optimizer"]["state"][0]["step"] == b["optimizer"]["state"][0]["step"]
 
 
+def test_the_optimiser_is_fused_on_the_cpu_and_stays_fused_when_an_unfused_checkpoint_is_resumed(tiny_train_config):
+    config = tiny_train_config(stop_at=10)
+    train(config)
+    path = config.out / "checkpoints" / "step_00000010.pt"
+    data = torch.load(path, weights_only=True)
+    assert data["optimizer"]["param_groups"][0]["fused"] is True
+    for group in data["optimizer"]["param_groups"]:  # as runs before the fused optimiser saved it
+        group["fused"] = None
+    torch.save(data, path)
+    trainer = Trainer(replace(config, stop_at=0, resume=True), dist_utils.setup("cpu"))
+    trainer.setup()
+    assert trainer.step == 10
+    assert all(group["fused"] for group in trainer.state.optimizer.param_groups)
+
+
+def test_a_model_with_a_shared_coarse_field_trains_its_one_field_with_3d_supervision(tiny_train_config):
+    config = tiny_train_config(
+        model=replace(tiny_train_config().model, coarse_field="shared"), points_weight=0.1, points_per_object=64
+    )
+    summary = train(config)
+    weights = torch.load(config.out / "checkpoints" / "step_00000020.pt", weights_only=True)["model"]
+    assert not any(k.startswith("renderer.fine.") for k in weights)
+    assert summary.step == 20 and np.isfinite(summary.scalars["loss/occupancy"])
+
+
+def test_a_shared_field_model_starts_from_a_two_field_run_with_its_fine_field_and_not_the_other_way(
+    tiny_train_config, tmp_path, capsys
+):
+    two = tiny_train_config(out=tmp_path / "two", stop_at=10)
+    train(two)
+    saved = torch.load(two.out / "checkpoints" / "step_00000010.pt", weights_only=True)["model"]
+    one = tiny_train_config(
+        out=tmp_path / "one", model=replace(two.model, coarse_field="shared"), init_from=two.out, steps=5
+    )
+    trainer = Trainer(one, dist_utils.setup("cpu"))
+    trainer.setup()
+    loaded = trainer.state.model.state_dict()
+    fine = {k: v for k, v in saved.items() if k.startswith("renderer.fine.")}
+    assert fine and all(torch.equal(loaded[k.replace(".fine.", ".coarse.", 1)], v) for k, v in fine.items())
+    assert all(torch.equal(loaded[k], v) for k, v in saved.items() if k.startswith("shape_encoder."))
+    train(replace(one, out=tmp_path / "one-trained", init_from=None))
+    back = tiny_train_config(out=tmp_path / "back", init_from=tmp_path / "one-trained", steps=5)
+    assert main(train_argv(back)) == 2  # a one-field model has no coarse field to give back
+    assert "another configuration (coarse_field 'shared' vs 'own')" in capsys.readouterr().err
+
+
 def test_a_run_started_from_another_runs_weights_begins_where_that_run_ended_with_a_fresh_schedule(
     tiny_train_config, tmp_path, capsys
 ):

@@ -142,7 +142,7 @@ class ConditionedNeRF(nn.Module, ABC):
     def _point_condition(self, encoding: Any, index: int) -> Any:
         """A callable (N, 3) points -> (the field used for meshes, the points on the model's device, their
         conditioned trunk input) for object ``index``: the fine field when there is one."""
-        field = self.fine if self.fine is not None else self.coarse
+        field = self.renderer.fine_field()
         device = next(self.parameters()).device
 
         def cond(points: torch.Tensor) -> tuple[Any, torch.Tensor, torch.Tensor]:

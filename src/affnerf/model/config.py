@@ -36,6 +36,11 @@ class ModelConfig:
         pe_dir: positional-encoding frequencies of view directions.
         num_coarse: stratified samples per ray (coarse field).
         num_fine: hierarchical samples per ray (fine field), added to the coarse ones.
+        coarse_field: what places the fine samples: ``own`` (the paper: a second, coarse field, trained with the
+            same losses) or ``shared`` (beyond the paper: the fine field itself, evaluated without gradients at the
+            stratified samples, as NeuS's hierarchical sampling uses its one network; the model has one field, so
+            a training step saves the coarse field's backward pass and its share of the 3D supervision; a
+            coarse-only model, ``num_fine`` 0, is trained as usual).
         near: start of every ray, metres.
         far: end of every ray, metres.
         clip_to_cube: sample only where rays cross the scene cube [-scene_half_extent, scene_half_extent]^3 (rays
@@ -93,6 +98,7 @@ class ModelConfig:
     pe_dir: int = 4
     num_coarse: int = 64
     num_fine: int = 128
+    coarse_field: Literal["own", "shared"] = "own"
     near: float = 0.1
     far: float = 1.5
     clip_to_cube: bool = False

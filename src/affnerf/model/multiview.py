@@ -179,15 +179,15 @@ class RayBlockRenderer(FieldRenderer):
     ) -> tuple[RayOutputs, RayOutputs | None]:
         """As :meth:`FieldRenderer.render_rays` with a block ``condition``; with ``fine_sampler``, the fine samples
         are its samples merged with the coarse ones (the fine field sees both)."""
-        if fine_sampler is None or self.fine is None:
+        if fine_sampler is None or self.config.num_fine == 0:
             return super().render_rays(condition, origins, dirs, background, perturb, generator)
         near, far, hit = self.ray_bounds(origins, dirs)
         idx = torch.nonzero(hit, as_tuple=True)[0]
         o, d, bg, n_, f_ = origins[idx], dirs[idx], background[idx], near[idx], far[idx]
         t_coarse = stratified_samples(n_, f_, self.config.num_coarse, perturb, generator)
-        coarse = self._stage(self.coarse, t_coarse, f_, o, d, idx, condition, bg)
+        coarse = self.coarse_pass(t_coarse, f_, o, d, idx, condition, bg)
         t_fine = merge_samples(t_coarse, fine_sampler(o, d, idx, t_coarse, n_, f_, perturb, generator))
-        fine = self._stage(self.fine, t_fine, f_, o, d, idx, condition, bg)
+        fine = self._stage(self.fine_field(), t_fine, f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)
 
 

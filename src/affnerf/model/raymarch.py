@@ -79,7 +79,8 @@ def scatter_rays(out: RayOutputs, hit: torch.Tensor, background: torch.Tensor) -
 
 
 class FieldRenderer(nn.Module):
-    """A coarse and a fine conditioned field and their coarse-to-fine rendering.
+    """A coarse and a fine conditioned field and their coarse-to-fine rendering (one field for both passes with
+    ``coarse_field`` ``shared``: ``coarse`` is then the only field, and ``fine`` None).
 
     Args:
         config: field sizes and sampling.
@@ -108,7 +109,7 @@ class FieldRenderer(nn.Module):
             )
 
         self.coarse = field()
-        self.fine = field() if config.num_fine > 0 else None
+        self.fine = field() if config.num_fine > 0 and config.coarse_field == "own" else None
         self.points_evaluated = 0  # field evaluations so far (for benchmarks)
 
     def ray_bounds(self, origins: torch.Tensor, dirs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -169,7 +170,7 @@ class FieldRenderer(nn.Module):
         t, step, hit = occupied_samples(grid, origins, dirs, near, far, num, candidates)
         hit = hit & inside
         idx = torch.nonzero(hit, as_tuple=True)[0]
-        field = self.fine if self.fine is not None else self.coarse
+        field = self.fine_field()
         deltas = step[idx, None].expand(len(idx), num)
         out = self._stage(field, t[idx], far[idx], origins[idx], dirs[idx], idx, condition, background[idx], deltas)
         return scatter_rays(out, hit, background)
@@ -194,16 +195,39 @@ class FieldRenderer(nn.Module):
             generator: random source when perturbing.
 
         Returns:
-            The coarse and the fine stage's outputs for all R rays (fine is None without fine samples).
+            The coarse and the fine stage's outputs for all R rays (fine is None without fine samples; the coarse
+            one carries no gradient with ``coarse_field`` ``shared``, :meth:`coarse_pass`).
         """
         c = self.config
         near, far, hit = self.ray_bounds(origins, dirs)
         idx = torch.nonzero(hit, as_tuple=True)[0]
         o, d, bg, n_, f_ = origins[idx], dirs[idx], background[idx], near[idx], far[idx]
         t_coarse = stratified_samples(n_, f_, c.num_coarse, perturb, generator)
-        coarse = self._stage(self.coarse, t_coarse, f_, o, d, idx, condition, bg)
-        if self.fine is None:
+        coarse = self.coarse_pass(t_coarse, f_, o, d, idx, condition, bg)
+        if c.num_fine == 0:
             return scatter_rays(coarse, hit, background), None
         t_fine = merge_samples(t_coarse, pdf_samples(t_coarse, coarse.weights, c.num_fine, perturb, generator))
-        fine = self._stage(self.fine, t_fine, f_, o, d, idx, condition, bg)
+        fine = self._stage(self.fine_field(), t_fine, f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)
+
+    def coarse_pass(
+        self,
+        t: torch.Tensor,
+        far: torch.Tensor,
+        origins: torch.Tensor,
+        dirs: torch.Tensor,
+        rays: torch.Tensor,
+        condition: Condition,
+        background: torch.Tensor,
+    ) -> RayOutputs:
+        """The coarse stage at (R, S) samples ``t`` of the rendered rays: by the coarse field, or, with
+        ``coarse_field`` ``shared`` and fine samples to place, by the fine field without gradients (its outputs
+        only place the fine samples; losses on them are constants)."""
+        shared = self.config.coarse_field == "shared" and self.config.num_fine > 0
+        with torch.set_grad_enabled(torch.is_grad_enabled() and not shared):
+            return self._stage(self.coarse, t, far, origins, dirs, rays, condition, background)
+
+    def fine_field(self) -> ConditionalField:
+        """The field of the fine pass, meshes and fast rendering: the fine one, or the only one (a coarse-only
+        model, or one whose coarse pass uses the fine field, ``coarse_field`` ``shared``)."""
+        return self.fine if self.fine is not None else self.coarse

@@ -27,6 +27,13 @@ from affnerf.train.sampler import PointSampler, RaySampler
 log = logging.getLogger(__name__)
 
 
+def make_optimizer(model: torch.nn.Module, lr: float, device: torch.device) -> torch.optim.Adam:
+    """Adam over the model's parameters, fused on CPU and CUDA (one kernel over all parameters instead of a loop of
+    small operations per parameter tensor; the same update within float rounding): on one CPU core the small
+    preset's optimiser step takes about 7 ms instead of 33 (benchmarks/results/step_cost.md)."""
+    return torch.optim.Adam(model.parameters(), lr=lr, fused=device.type in ("cpu", "cuda"))
+
+
 def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> Path:
     """Load the weights of ``source`` (a checkpoint file, or a run folder's last checkpoint) into ``model``,
     refusing another architecture or class count; returns the checkpoint read.
@@ -42,14 +49,28 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
             raise AffnerfError(f"{source}: --init-from names a folder with no checkpoints/step_*.pt")
         path = found[-1]
     data = load_checkpoint(path)
-    base, added = grown_config(data, model.config)
+    saved = {**dataclasses.asdict(ModelConfig()), **data.get("model_config", {})}
+    shrink = model.config.coarse_field == "shared" and saved["coarse_field"] == "own" and saved["num_fine"] > 0
+    base, added = grown_config(data, dataclasses.replace(model.config, coarse_field="own") if shrink else model.config)
     check_compatible(data, base, num_classes, path)
-    missing, unexpected = model.load_state_dict(data["model"], strict=not added)
+    weights = one_field_weights(data["model"]) if shrink else data["model"]
+    missing, unexpected = model.load_state_dict(weights, strict=not added)
     if unexpected or any(not any(part in key for part in added) for key in missing):
         raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
     if added:
         log.info("%s: grown by %s, which start where they change nothing", path, ", ".join(added))
+    if shrink:
+        log.info("%s: its fine field is the one field of --model.coarse-field shared", path)
     return path
+
+
+def one_field_weights(weights: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """A two-field model's weights for the same model with one field for both passes (``coarse_field`` ``shared``):
+    its fine field's, under the one field's names (``renderer.coarse.``); its coarse field is dropped. The meshes and
+    fast renders of the two models are the same (both use the fine field); full renders differ only in where the
+    fine samples go."""
+    kept = {k: v for k, v in weights.items() if not k.startswith("renderer.coarse.")}
+    return {k.replace("renderer.fine.", "renderer.coarse.", 1): v for k, v in kept.items()}
 
 
 def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig, tuple[str, ...]]:
@@ -151,7 +172,10 @@ class TrainingState:
         data = load_checkpoint(path)
         check_compatible(data, config.model, num_classes, path)
         self.model.load_state_dict(data["model"])
+        fused = self.optimizer.defaults.get("fused")
         self.optimizer.load_state_dict(data["optimizer"])
+        for group in self.optimizer.param_groups:  # a checkpoint's groups carry its own (older runs: unfused)
+            group["fused"] = fused
         states = data.get("rank_states", [])
         if len(states) == ctx.world:
             state = states[ctx.rank]

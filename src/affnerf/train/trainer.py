@@ -50,7 +50,7 @@ from affnerf.train.points import DISTANCE_TRUNCATION, PointSet
 from affnerf.train.precision import forward_precision
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.schedule import learning_rate, points_weight
-from affnerf.train.state import TrainingState, initial_weights, params_checksum, prepare_run_folder
+from affnerf.train.state import TrainingState, initial_weights, make_optimizer, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
 
@@ -241,7 +241,7 @@ class Trainer:
         config, ctx = self.config, self.ctx
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
-        optimizer = torch.optim.Adam(model.parameters(), lr=config.optim.lr)
+        optimizer = make_optimizer(model, config.optim.lr, ctx.device)
         sampler = RaySampler(
             frames,
             config.objects_per_step,
