@@ -9,6 +9,8 @@
 # calibrated (32 validation objects) and scored on val40 (side_by_side.sh) and by surface_errors.py.
 #
 #   DATA=/tmp/w/data WORK=/tmp/shared CACHE=... OWN_STEPS=N SHARED_STEPS=M benchmarks/shared_field.sh
+#
+# EXTRA: more training options for both runs (e.g. "--seed 1"); SURFACE_ERRORS=0 skips surface_errors.py.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -16,6 +18,7 @@ W="${WORK:?WORK: the work folder}"
 CACHE="${CACHE:-$W/cache}"
 MINUTES="${MINUTES:-45}"
 LIMIT="$MINUTES"
+read -r -a EXTRA_ARGS <<< "${EXTRA:-}"
 export OMP_NUM_THREADS=1  # one thread a run: two runs on two cores
 mkdir -p "$W"
 
@@ -30,14 +33,14 @@ if [[ -n "${STEPS_PILOT:-}" ]]; then  # seconds a step of each, side by side
     for kind in own shared; do grep -h '"seconds"' "$W/pilot_$kind/summary.json" || true; done
     exit 0
 fi
-timed_small_run own "${OWN_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field own &
-timed_small_run shared "${SHARED_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field shared &
+timed_small_run own "${OWN_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field own "${EXTRA_ARGS[@]}" &
+timed_small_run shared "${SHARED_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field shared "${EXTRA_ARGS[@]}" &
 wait
 for name in own shared; do
     (.venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu &&
         val40 "$name" "$W/$name" &&
-        .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$W/$name" \
-            --out "$W/surface_errors_$name.json") > "$W/score_$name.log" 2>&1 &
+        { [[ "${SURFACE_ERRORS:-1}" == 0 ]] || .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$W/$name" \
+            --out "$W/surface_errors_$name.json"; }) > "$W/score_$name.log" 2>&1 &
 done
 wait
 for name in own shared; do echo "== $name"; sed -n 5,9p "$W/val40_$name/table2.md"; done

@@ -30,7 +30,7 @@ log = logging.getLogger(__name__)
 def make_optimizer(model: torch.nn.Module, lr: float, device: torch.device) -> torch.optim.Adam:
     """Adam over the model's parameters, fused on CPU and CUDA (one kernel over all parameters instead of a loop of
     small operations per parameter tensor; the same update within float rounding): on one CPU core the small
-    preset's optimiser step takes about 7 ms instead of 33 (benchmarks/results/step_cost.md)."""
+    preset's optimiser step takes about 5 ms instead of 18 (benchmarks/results/step_cost.md)."""
     return torch.optim.Adam(model.parameters(), lr=lr, fused=device.type in ("cpu", "cuda"))
 
 
