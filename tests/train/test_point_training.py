@@ -18,6 +18,7 @@ from affnerf.train import distributed as dist_utils
 from affnerf.train.config import PAPER, SMALL, check_options
 from affnerf.train.loss import nerf_loss
 from affnerf.train.sampler import RaySampler
+from affnerf.train.state import make_optimizer
 from affnerf.train.trainer import Trainer, train
 
 CPU = dist_utils.Context(rank=0, world=1, device=torch.device("cpu"))
@@ -80,7 +81,7 @@ def test_weight_zero_takes_the_papers_step_bit_for_bit(tiny_train_config, train_
     assert "points" not in trainer.state.rank_state()
     torch.manual_seed(config.seed)
     model = build_model(config.model, len(Dataset.open(train_dataset).affordance_classes))
-    optimizer = torch.optim.Adam(model.parameters(), lr=config.optim.lr)
+    optimizer = make_optimizer(model, config.optim.lr, torch.device("cpu"))  # the trainer's (fused) Adam
     sampler = RaySampler(trainer.state.sampler.objects, config.objects_per_step, config.rays_per_step, 0.5, config.seed)
     generator = torch.Generator().manual_seed(config.seed * 1000)
     for step in range(3):
