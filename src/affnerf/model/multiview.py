@@ -185,7 +185,8 @@ class RayBlockRenderer(FieldRenderer):
         idx = torch.nonzero(hit, as_tuple=True)[0]
         o, d, bg, n_, f_ = origins[idx], dirs[idx], background[idx], near[idx], far[idx]
         t_coarse = stratified_samples(n_, f_, self.config.num_coarse, perturb, generator)
-        coarse = self.coarse_pass(t_coarse, f_, o, d, idx, condition, bg)
+        with self.coarse_gradients():
+            coarse = self._stage(self.coarse, t_coarse, f_, o, d, idx, condition, bg)
         t_fine = merge_samples(t_coarse, fine_sampler(o, d, idx, t_coarse, n_, f_, perturb, generator))
         fine = self._stage(self.fine_field(), t_fine, f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)

@@ -196,36 +196,26 @@ class FieldRenderer(nn.Module):
 
         Returns:
             The coarse and the fine stage's outputs for all R rays (fine is None without fine samples; the coarse
-            one carries no gradient with ``coarse_field`` ``shared``, :meth:`coarse_pass`).
+            one carries no gradient with ``coarse_field`` ``shared``, :meth:`coarse_gradients`).
         """
         c = self.config
         near, far, hit = self.ray_bounds(origins, dirs)
         idx = torch.nonzero(hit, as_tuple=True)[0]
         o, d, bg, n_, f_ = origins[idx], dirs[idx], background[idx], near[idx], far[idx]
         t_coarse = stratified_samples(n_, f_, c.num_coarse, perturb, generator)
-        coarse = self.coarse_pass(t_coarse, f_, o, d, idx, condition, bg)
+        with self.coarse_gradients():
+            coarse = self._stage(self.coarse, t_coarse, f_, o, d, idx, condition, bg)
         if c.num_fine == 0:
             return scatter_rays(coarse, hit, background), None
         t_fine = merge_samples(t_coarse, pdf_samples(t_coarse, coarse.weights, c.num_fine, perturb, generator))
         fine = self._stage(self.fine_field(), t_fine, f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)
 
-    def coarse_pass(
-        self,
-        t: torch.Tensor,
-        far: torch.Tensor,
-        origins: torch.Tensor,
-        dirs: torch.Tensor,
-        rays: torch.Tensor,
-        condition: Condition,
-        background: torch.Tensor,
-    ) -> RayOutputs:
-        """The coarse stage at (R, S) samples ``t`` of the rendered rays: by the coarse field, or, with
-        ``coarse_field`` ``shared`` and fine samples to place, by the fine field without gradients (its outputs
-        only place the fine samples; losses on them are constants)."""
+    def coarse_gradients(self) -> torch.autograd.grad_mode.set_grad_enabled:
+        """The gradient mode of the coarse stage: as around it, or off with ``coarse_field`` ``shared`` and fine
+        samples to place (the one field's coarse outputs only place them; losses on them are constants)."""
         shared = self.config.coarse_field == "shared" and self.config.num_fine > 0
-        with torch.set_grad_enabled(torch.is_grad_enabled() and not shared):
-            return self._stage(self.coarse, t, far, origins, dirs, rays, condition, background)
+        return torch.set_grad_enabled(torch.is_grad_enabled() and not shared)
 
     def fine_field(self) -> ConditionalField:
         """The field of the fine pass, meshes and fast rendering: the fine one, or the only one (a coarse-only

@@ -71,11 +71,17 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     return data
 
 
+def saved_model_config(data: dict[str, Any]) -> dict[str, Any]:
+    """A checkpoint's model configuration as a dict, a field it lacks (one added to :class:`ModelConfig` after it
+    was made) at its default, which is what the checkpoint's model was."""
+    return {**dataclasses.asdict(ModelConfig()), **data.get("model_config", {})}
+
+
 def check_compatible(data: dict[str, Any], model: ModelConfig, num_classes: int, path: Path) -> None:
     """Refuse a checkpoint made with another architecture or class count, naming what differs. A field the
     checkpoint's configuration lacks (one added to :class:`ModelConfig` after it was made) counts as its default,
     which is what the checkpoint's model was."""
-    saved = {**dataclasses.asdict(ModelConfig()), **data.get("model_config", {})}
+    saved = saved_model_config(data)
     ours = dataclasses.asdict(model)
     diff = [
         f"{k} {saved[k]!r} vs {ours[k]!r}" for k in ours if k not in NON_ARCHITECTURE_FIELDS and saved[k] != ours[k]

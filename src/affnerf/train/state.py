@@ -20,7 +20,13 @@ from affnerf.fileio import write_json_atomic
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.train import distributed as dist_utils
-from affnerf.train.checkpoint import check_compatible, list_checkpoints, load_checkpoint, save_checkpoint
+from affnerf.train.checkpoint import (
+    check_compatible,
+    list_checkpoints,
+    load_checkpoint,
+    save_checkpoint,
+    saved_model_config,
+)
 from affnerf.train.config import TrainConfig, config_to_json
 from affnerf.train.sampler import PointSampler, RaySampler
 
@@ -49,7 +55,7 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
             raise AffnerfError(f"{source}: --init-from names a folder with no checkpoints/step_*.pt")
         path = found[-1]
     data = load_checkpoint(path)
-    saved = {**dataclasses.asdict(ModelConfig()), **data.get("model_config", {})}
+    saved = saved_model_config(data)
     shrink = model.config.coarse_field == "shared" and saved["coarse_field"] == "own" and saved["num_fine"] > 0
     base, added = grown_config(data, dataclasses.replace(model.config, coarse_field="own") if shrink else model.config)
     check_compatible(data, base, num_classes, path)
