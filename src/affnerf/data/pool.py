@@ -12,6 +12,9 @@ The OpenMP, BLAS and torch thread pools of a worker are sized to one thread too 
 the child's environment before it imports anything): a floating-point sum split over threads is added in an
 order that depends on their number, so a job's numbers would otherwise depend on the machine's core count (the
 fit of a predicted model, measured: 1 and 2 threads give other grasps on every predicted mesh of Table 3).
+
+A worker ends as soon as its parent does (:func:`_exit_with_parent`): a parent stopped by a signal (``kill``, a
+job scheduler's time limit) runs no cleanup, and its workers would otherwise go on through the queued jobs.
 """
 
 from __future__ import annotations
@@ -19,7 +22,9 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import queue as queue_module
+import threading
 from collections.abc import Callable, Iterator, Sequence
+from multiprocessing.connection import wait
 from typing import Any
 
 _POLL_SECONDS = 0.2
@@ -34,8 +39,25 @@ SINGLE_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS
 Work = Callable[[Any, Callable[[], None]], Any]
 
 
+def _exit_with_parent() -> None:
+    """In a worker: end this process the moment its parent process ends, whatever it is doing (a watching
+    thread waits on the parent's sentinel). A child process the job started, such as a CoACD decomposition
+    (:mod:`affnerf.grasp.coacd_worker`), finishes its one task on its own."""
+    parent = mp.parent_process()
+    if parent is None:
+        return
+
+    def watch() -> None:
+        wait([parent.sentinel])
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
 def _worker_loop(work: Work, tasks: Any, results: Any, progress: Any) -> None:
-    """Run jobs from ``tasks`` until a None arrives; report ("ok", result) or ("error", exception)."""
+    """Run jobs from ``tasks`` until a None arrives; report ("ok", result) or ("error", exception). Ends with the
+    parent process (:func:`_exit_with_parent`)."""
+    _exit_with_parent()
     while True:
         job = tasks.get()
         if job is None:
