@@ -25,17 +25,14 @@ mkdir -p "$W"
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 
-# stage NAME CORE STEPS KIND: the further stage W/NAME on core CORE, then its scores (see above)
+# stage NAME CORE STEPS KIND: the further stage W/NAME on core CORE (side_by_side.sh's calibrated_stage, stopped
+# at MINUTES), then its scores (see above)
 stage() {
-    local name=$1 run="$W/$1"
     taskset -cp "$2" "$BASHPID" > /dev/null  # this subshell (start it with &) and all it starts
-    .venv/bin/affnerf train --data "$DATA" --out "$run" --config small --steps "$3" --time-limit "$MINUTES" \
-        --device cpu --checkpoint-every 1000 --keep-checkpoints 100 --val-every 0 --no-progress \
-        --init-from "$SHIPPED" --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$CACHE" --model.coarse-field "$4"
-    .venv/bin/affnerf eval calibrate --run "$run" --data "$DATA" --max-objects 32 --device cpu
-    val40 "$name" "$run"
-    .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$run" --methods affnerf \
-        --out "$W/surface_errors_$name.json"
+    calibrated_stage "$1" "$SHIPPED" "$3" "$CACHE" --time-limit "$MINUTES" --val-every 0 --model.coarse-field "$4"
+    val40 "$1" "$W/$1"
+    .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$W/$1" --methods affnerf \
+        --out "$W/surface_errors_$1.json"
 }
 
 warm_cache "$CACHE"

@@ -26,7 +26,7 @@ timed_small_run() {
 
 # calibrated_stage NAME INIT STEPS CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the weights INIT (a fresh
 # Adam, 2e-4 -> 2e-5 over STEPS steps, frames and points in CACHE), then its mesh level calibrated on 32 validation
-# objects (fine_tune_view_labels.sh, further_stage_outer_surface.sh).
+# objects (fine_tune_view_labels.sh, further_stage_outer_surface.sh, fine_tune_shared_field.sh).
 calibrated_stage() {
     local name=$1 init=$2 steps=$3 cache=$4
     shift 4
