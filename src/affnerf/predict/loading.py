@@ -11,7 +11,7 @@ from affnerf.errors import input_error
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.registry import build_model
-from affnerf.train.checkpoint import list_checkpoints, load_checkpoint
+from affnerf.train.checkpoint import inference_weights, list_checkpoints, load_checkpoint
 
 
 @dataclass
@@ -64,7 +64,7 @@ def load_model(path: Path, device: str | torch.device = "cpu") -> LoadedModel:
     try:
         config = ModelConfig(**data["model_config"])
         model = build_model(config, int(data["num_classes"]))
-        model.load_state_dict(data["model"])
+        model.load_state_dict(inference_weights(data))
     except (KeyError, TypeError, RuntimeError) as exc:
         raise input_error(
             ckpt, f"checkpoint does not match this version's model ({' '.join(str(exc).split())[:200]})"

@@ -71,6 +71,12 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     return data
 
 
+def inference_weights(data: dict[str, Any]) -> dict[str, torch.Tensor]:
+    """The weights a checkpoint's model is used with: the average of its weights (``ema``, written with
+    ``--optim.ema-decay``) when it has one, else the trained weights (``model``)."""
+    return data.get("ema") or data["model"]
+
+
 def saved_model_config(data: dict[str, Any]) -> dict[str, Any]:
     """A checkpoint's model configuration as a dict, a field it lacks (one added to :class:`ModelConfig` after it
     was made) at its default, which is what the checkpoint's model was."""

@@ -25,11 +25,15 @@ class OptimConfig:
         lr: initial learning rate.
         lr_final: learning rate reached at the last step (decays exponentially from ``lr``).
         grad_clip: clip the gradient norm to this (0 = no clipping).
+        ema_decay: keep an exponential moving average of the weights with this decay per step (0 = none; e.g.
+            0.999 averages about the last thousand steps; :mod:`affnerf.train.ema`). Checkpoints then hold it
+            beside the weights, and predict, eval and ``--init-from`` use it.
     """
 
     lr: float = 5e-4
     lr_final: float = 5e-5
     grad_clip: float = 0.0
+    ema_decay: float = 0.0
 
 
 @dataclass(frozen=True)

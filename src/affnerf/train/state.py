@@ -22,12 +22,14 @@ from affnerf.model.config import ModelConfig
 from affnerf.train import distributed as dist_utils
 from affnerf.train.checkpoint import (
     check_compatible,
+    inference_weights,
     list_checkpoints,
     load_checkpoint,
     save_checkpoint,
     saved_model_config,
 )
 from affnerf.train.config import TrainConfig, config_to_json
+from affnerf.train.ema import WeightAverage
 from affnerf.train.sampler import PointSampler, RaySampler
 
 log = logging.getLogger(__name__)
@@ -59,7 +61,7 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
     shrink = model.config.coarse_field == "shared" and saved["coarse_field"] == "own" and saved["num_fine"] > 0
     base, added = grown_config(data, dataclasses.replace(model.config, coarse_field="own") if shrink else model.config)
     check_compatible(data, base, num_classes, path)
-    weights = one_field_weights(data["model"]) if shrink else data["model"]
+    weights = one_field_weights(inference_weights(data)) if shrink else inference_weights(data)
     missing, unexpected = model.load_state_dict(weights, strict=not added)
     if unexpected or any(not any(part in key for part in added) for key in missing):
         raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
@@ -132,6 +134,7 @@ class TrainingState:
         sampler: this rank's ray sampler (object order, position, random draws).
         generator: this rank's generator of the forward pass's sample perturbations.
         points: this rank's sampler of 3D supervision points (None when ``points_weight`` is 0).
+        ema: the average of the model's weights (None when ``optim.ema_decay`` is 0).
     """
 
     model: ConditionedNeRF
@@ -139,6 +142,7 @@ class TrainingState:
     sampler: RaySampler
     generator: torch.Generator
     points: PointSampler | None = None
+    ema: WeightAverage | None = None
 
     def rank_state(self) -> dict[str, Any]:
         """This rank's data order and random state: sampler, forward-pass generator and torch's global RNG (and the
@@ -151,6 +155,14 @@ class TrainingState:
         if self.points is not None:
             state["points"] = self.points.state_dict()
         return state
+
+    def start_from(self, source: Path, num_classes: int) -> Path:
+        """Load ``source``'s weights (:func:`initial_weights`) into the model, and start the average of the weights,
+        if any, from them; returns the checkpoint read."""
+        path = initial_weights(source, self.model, num_classes)
+        if self.ema is not None:
+            self.ema.reset(self.model)
+        return path
 
     def save(self, config: TrainConfig, ctx: dist_utils.Context, step: int, classes: list[str]) -> None:
         """Write ``checkpoints/step_<step>.pt`` from rank 0 with every rank's state; all ranks must call it."""
@@ -166,6 +178,8 @@ class TrainingState:
                 "train_config": config_to_json(config),
                 "rank_states": states,
             }
+            if self.ema is not None:
+                payload["ema"], payload["ema_updates"] = self.ema.state_dict(self.model), self.ema.updates
             save_checkpoint(Path(config.out) / "checkpoints", step, payload, config.keep_checkpoints)
         dist_utils.barrier(ctx)
 
@@ -182,6 +196,8 @@ class TrainingState:
         self.optimizer.load_state_dict(data["optimizer"])
         for group in self.optimizer.param_groups:  # a checkpoint's groups carry its own (older runs: unfused)
             group["fused"] = fused
+        if self.ema is not None:  # a run that had no average starts it from the weights it resumes
+            self.ema.load_state_dict(data.get("ema", data["model"]), int(data.get("ema_updates", 0)))
         states = data.get("rank_states", [])
         if len(states) == ctx.world:
             state = states[ctx.rank]

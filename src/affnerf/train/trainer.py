@@ -35,6 +35,7 @@ from affnerf.train import distributed as dist_utils
 from affnerf.train.augment import jitter_crops
 from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
 from affnerf.train.config import TrainConfig, check_options
+from affnerf.train.ema import WeightAverage
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
 from affnerf.train.loss import (
@@ -50,7 +51,7 @@ from affnerf.train.points import DISTANCE_TRUNCATION, PointSet
 from affnerf.train.precision import forward_precision
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.schedule import learning_rate, points_weight
-from affnerf.train.state import TrainingState, initial_weights, make_optimizer, params_checksum, prepare_run_folder
+from affnerf.train.state import TrainingState, make_optimizer, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
 
@@ -226,7 +227,7 @@ class Trainer:
         if resume_from is not None:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
         elif config.init_from is not None:
-            source = initial_weights(config.init_from, self.state.model, len(self.dataset.affordance_classes))
+            source = self.state.start_from(config.init_from, len(self.dataset.affordance_classes))
             if ctx.is_main:
                 log.info("started from the weights of %s", source)
         self.net = TrainingPass(self.state.model, config.input_views, config.view_consistency_weight)
@@ -253,7 +254,8 @@ class Trainer:
             config.input_views + (1 if config.view_consistency_weight > 0 else 0),
         )
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
-        return TrainingState(model, optimizer, sampler, generator)
+        ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
+        return TrainingState(model, optimizer, sampler, generator, ema=ema)
 
     def _make_hooks(self) -> list[Hook]:
         """The logger, the progress bar and the hooks run after each iteration, in the order they run."""
@@ -317,6 +319,8 @@ class Trainer:
         if config.optim.grad_clip > 0:
             torch.nn.utils.clip_grad_norm_(state.model.parameters(), config.optim.grad_clip)
         state.optimizer.step()
+        if state.ema is not None:
+            state.ema.update(state.model)
         scheduled = {"train/lr": lr} if points is None else {"train/lr": lr, "train/points_weight": mu}
         return {"loss/total": total.detach(), **outputs, **scheduled}
 
