@@ -7,7 +7,9 @@
 #
 #   DATA=/tmp/w/data WORK=/tmp/ema CACHE=... SEED=1 STEPS=12600 benchmarks/weight_average.sh
 #
-# Run it once per SEED (each in its own WORK, or the same one: the run folders are named by seed).
+# Run it once per SEED (each in its own WORK, or the same one: the run folders are named by seed). EXTRA: more
+# training options, with NAME naming the run (e.g. NAME=one EXTRA="--model.encoders one": its own weights and their
+# average against another run's, side by side).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -17,15 +19,16 @@ MINUTES="${MINUTES:-46}"
 LIMIT="$MINUTES"
 SEED="${SEED:-1}"
 DECAY="${DECAY:-0.9995}"
+read -r -a EXTRA_ARGS <<< "${EXTRA:-}"
 export OMP_NUM_THREADS=1  # one thread a run: two runs on two cores
 mkdir -p "$W"
 
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
 warm_cache "$CACHE"
-run="ema_seed$SEED"
+run="${NAME:-ema}_seed$SEED"
 timed_small_run "$run" "${STEPS:?STEPS: the schedule, about the steps MINUTES allow}" --cache-dir "$CACHE" \
-    --seed "$SEED" --optim.ema-decay "$DECAY"
+    --seed "$SEED" --optim.ema-decay "$DECAY" "${EXTRA_ARGS[@]}"
 # the run's own weights: the last checkpoint without its average, in a run folder of their own
 last=$(find "$W/$run/checkpoints" -name 'step_*.pt' | sort | tail -1)
 mkdir -p "$W/${run}_raw/checkpoints"

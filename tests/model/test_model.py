@@ -8,10 +8,12 @@ from dataclasses import replace
 import pytest
 import torch
 
+from affnerf.errors import AffnerfError
 from affnerf.model.affnerf import AffNeRF
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
 from affnerf.model.field import ConditionalField, ObjectCodes
+from affnerf.model.registry import build_model
 from affnerf.model.resnet import CodeEncoder, ResNet18
 
 SMALL = ModelConfig(
@@ -218,3 +220,25 @@ def test_a_shared_coarse_field_places_the_fine_samples_with_the_one_field_and_wi
         )
     torch.testing.assert_close(again.rgb[:2], alone.rgb)
     assert len(shared.point_geometry(codes, torch.tensor([0, 1]), torch.rand(2, 3) - 0.5)) == 1
+
+
+def test_one_encoder_gives_both_codes_from_one_trunk_and_both_heads_learn():
+    torch.manual_seed(0)
+    one = AffNeRF(replace(SMALL, encoders="one"), num_classes=3)
+    two = AffNeRF(SMALL, num_classes=3)
+    assert one.appearance_encoder is None and one.shape_encoder.second_head is not None
+    assert two.shape_encoder.second_head is None
+    trunk = sum(p.numel() for p in one.shape_encoder.backbone.parameters())
+    saved = sum(p.numel() for p in two.parameters()) - sum(p.numel() for p in one.parameters())
+    assert saved == trunk  # the second trunk goes, its linear layer stays as the second head
+    codes = one.encode(torch.rand(2, 3, 32, 32))
+    assert codes.shape.shape == codes.appearance.shape == (2, 32)
+    assert not torch.allclose(codes.shape, codes.appearance)
+    (codes.shape.sum() + codes.appearance.sum()).backward()
+    assert one.shape_encoder.head.weight.grad.abs().sum() > 0
+    assert one.shape_encoder.second_head.weight.grad.abs().sum() > 0
+
+
+def test_only_aff_nerf_merges_its_encoders():
+    with pytest.raises(AffnerfError, match="merges AFF-NeRF's two encoders"):
+        build_model(replace(SMALL, kind="pixelnerf", encoders="one"), 3)

@@ -33,7 +33,8 @@ class LabelledCodes(Codes):
 
 
 class AffNeRF(ConditionedNeRF):
-    """Two ResNet18 encoders and a coarse and a fine field conditioned on their codes.
+    """Two ResNet18 encoders (or, with ``encoders`` ``one``, one with two linear heads) and a coarse and a fine
+    field conditioned on their codes.
 
     The shape code joins PE(position) in the trunk (density, affordance, feature); the appearance code joins
     PE(direction) and the feature in the colour head. With ``triplane`` conditioning the trunk also reads each
@@ -49,8 +50,9 @@ class AffNeRF(ConditionedNeRF):
     def __init__(self, config: ModelConfig, num_classes: int) -> None:
         super().__init__(config, num_classes)
         label_classes = num_classes if config.view_affordance_weight > 0 else 0
-        self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width, label_classes)
-        self.appearance_encoder = CodeEncoder(config.code_dim, config.encoder_width)
+        one = config.encoders == "one"
+        self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width, label_classes, second_code=one)
+        self.appearance_encoder = None if one else CodeEncoder(config.code_dim, config.encoder_width)
         self.planes: PlaneGenerator | None = None
         trunk_dim = config.code_dim
         if config.conditioning == "triplane":
@@ -62,8 +64,10 @@ class AffNeRF(ConditionedNeRF):
     def encode(self, images: torch.Tensor) -> Codes:
         """(B, 3, S, S) object crops in [0, 1] -> their codes; while training a model with a pixel-labelling head,
         :class:`LabelledCodes` with the crops' (B, C, S / 4, S / 4) logits."""
-        shape, logits = self.shape_encoder.encode(images, labels=self.training)
-        appearance = self.appearance_encoder(images)
+        shape, appearance, logits = self.shape_encoder.encode_both(images, labels=self.training)
+        if self.appearance_encoder is not None:
+            appearance = self.appearance_encoder(images)
+        assert appearance is not None  # one encoder gives both codes
         return Codes(shape, appearance) if logits is None else LabelledCodes(shape, appearance, logits)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Codes:

@@ -82,6 +82,9 @@ class ModelConfig:
             (benchmarks/pose_oracle.py); the camera head is trained either way.
         plane_resolution: side of each feature plane of ``triplane`` conditioning (4 times a power of two).
         plane_channels: features per plane of ``triplane`` conditioning (the trunk reads three times as many).
+        encoders: AFF-NeRF only: ``two`` ResNet18 encoders, one for the shape code and one for the appearance code
+            (the paper), or, beyond the paper, ``one`` whose pooled features give both codes through two linear
+            layers (pixelNeRF's single encoder): a step saves one encoder's forward and backward pass.
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -112,6 +115,7 @@ class ModelConfig:
     projection_camera: Literal["predicted", "given"] = "predicted"
     plane_resolution: int = 64
     plane_channels: int = 16
+    encoders: Literal["two", "one"] = "two"
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint

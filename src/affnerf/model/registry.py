@@ -45,8 +45,9 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
 
     Raises:
         ValueError: for a kind no class is registered under.
-        AffnerfError: for ``triplane`` conditioning or a ``view_affordance_weight`` of another kind than
-            ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes, and only its encoder labels pixels).
+        AffnerfError: for ``triplane`` conditioning, a ``view_affordance_weight`` or ``encoders`` ``one`` of another
+            kind than ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes, only its encoder labels
+            pixels, and only it has the two encoders that ``one`` merges).
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
@@ -54,4 +55,6 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
         raise AffnerfError(f"triplane conditioning decodes AFF-NeRF's shape code; a {config.kind} model has none")
     if config.view_affordance_weight > 0 and config.kind != "affnerf":
         raise AffnerfError(f"--model.view-affordance-weight labels AFF-NeRF's input crops, not a {config.kind} model's")
+    if config.encoders == "one" and config.kind != "affnerf":
+        raise AffnerfError(f"--model.encoders one merges AFF-NeRF's two encoders; a {config.kind} model has its own")
     return MODEL_KINDS[config.kind](config, num_classes)

@@ -89,12 +89,15 @@ class CodeEncoder(nn.Module):
         code_dim: size of the code (32 in the paper).
         width: ResNet18 channel multiplier.
         label_classes: classes of the pixel labelling head (0: no head, the paper's encoder).
+        second_code: also give a second code of the same size from the same pooled features (its own linear
+            layer, ``second_head``): one trunk for two codes.
     """
 
-    def __init__(self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0) -> None:
+    def __init__(self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0, second_code: bool = False):
         super().__init__()
         self.backbone = ResNet18(width)
         self.head = nn.Linear(self.backbone.channels[-1], code_dim)
+        self.second_head = nn.Linear(self.backbone.channels[-1], code_dim) if second_code else None
         self.label_head = nn.Conv2d(sum(self.backbone.channels), label_classes, 1) if label_classes else None
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
@@ -104,8 +107,16 @@ class CodeEncoder(nn.Module):
     def encode(self, images: torch.Tensor, labels: bool = True) -> tuple[torch.Tensor, torch.Tensor | None]:
         """(B, 3, H, W) images in [0, 1] -> (B, code_dim) codes and, with ``labels`` and a labelling head,
         (B, label_classes, H / 4, W / 4) pixel logits (else None)."""
+        code, _, logits = self.encode_both(images, labels)
+        return code, logits
+
+    def encode_both(
+        self, images: torch.Tensor, labels: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor | None]:
+        """As :meth:`encode`, with the second code (B, code_dim) between them (None without ``second_code``)."""
         feats = self.backbone(images)
-        code = self.head(feats[-1].mean(dim=(2, 3)))
+        pooled = feats[-1].mean(dim=(2, 3))
+        second = None if self.second_head is None else self.second_head(pooled)
         if not labels or self.label_head is None:
-            return code, None
-        return code, self.label_head(stacked_features(feats))
+            return self.head(pooled), second, None
+        return self.head(pooled), second, self.label_head(stacked_features(feats))
