@@ -8,6 +8,7 @@ import pytest
 import torch
 
 from affnerf.predict.loading import load_model
+from affnerf.predict.shipped import export_for_inference
 from affnerf.train import distributed as dist_utils
 from affnerf.train.ema import WeightAverage, ema_rate
 from affnerf.train.trainer import Trainer, train
@@ -43,6 +44,8 @@ def test_a_run_with_an_average_saves_it_resumes_it_exactly_and_inference_uses_it
     assert differ  # the average lags behind the trained weights
     loaded = load_model(config.out).model.state_dict()
     assert all(torch.equal(loaded[k], data["ema"][k]) for k in differ)
+    slim = torch.load(export_for_inference(config.out, tmp_path / "slim.pt"), weights_only=True)
+    assert "ema" not in slim and all(torch.equal(slim["model"][k], data["ema"][k]) for k in data["ema"])
 
     halves = replace(config, out=tmp_path / "halves", stop_at=10)
     train(halves)

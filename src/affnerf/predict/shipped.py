@@ -19,7 +19,7 @@ import torch
 from affnerf.errors import AffnerfError
 from affnerf.fileio import atomic_write
 from affnerf.predict.loading import resolve_checkpoint
-from affnerf.train.checkpoint import load_checkpoint
+from affnerf.train.checkpoint import inference_weights, load_checkpoint
 
 SHIPPED_NAME = "affnerf-small.pt"
 SHIPPED_SEGMENTER_NAME = "segmenter-u2netp.pt"
@@ -57,9 +57,11 @@ def shipped_segmenter() -> Path | None:
 
 def export_for_inference(run: Path, out: Path) -> Path:
     """Write the last checkpoint of ``run`` (a run folder or checkpoint file) with only the entries inference
-    needs, atomically; returns ``out``."""
+    needs, atomically; returns ``out``. A run with an average of its weights (``--optim.ema-decay``) is exported
+    with the average as its ``model``."""
     data = load_checkpoint(resolve_checkpoint(Path(run)))
     slim = {k: data[k] for k in INFERENCE_KEYS if k in data}
+    slim["model"] = inference_weights(data)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(out, lambda f: torch.save(slim, f))
