@@ -43,9 +43,14 @@ for key in ("ema", "ema_updates"):
 torch.save(data, sys.argv[2])
 PY
 cp "$W/$run/config.json" "$W/${run}_raw/"
-for name in "${run}_raw" "$run"; do
+# SCORE: which of the two to score (raw: the run's own weights, ema: their average); SURFACE_ERRORS=0 skips
+# surface_errors.py
+names=()
+for which in ${SCORE:-raw ema}; do names+=("$run$([[ "$which" == raw ]] && echo _raw)"); done
+for name in "${names[@]}"; do
     .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
     val40 "$name" "$W/$name"
-    .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$W/$name" --out "$W/surface_errors_$name.json"
+    [[ "${SURFACE_ERRORS:-1}" == 0 ]] || .venv/bin/python benchmarks/surface_errors.py --data "$DATA" \
+        --run "$W/$name" --out "$W/surface_errors_$name.json"
 done
-for name in "${run}_raw" "$run"; do echo "== $name"; sed -n 5,9p "$W/val40_$name/table2.md"; done
+for name in "${names[@]}"; do echo "== $name"; sed -n 5,9p "$W/val40_$name/table2.md"; done
