@@ -6,7 +6,9 @@ from dataclasses import replace
 
 import pytest
 import torch
+from support import train_argv
 
+from affnerf.cli.main import main
 from affnerf.predict.loading import load_model
 from affnerf.predict.shipped import export_for_inference
 from affnerf.train import distributed as dist_utils
@@ -33,6 +35,13 @@ def test_the_average_follows_the_weights_at_its_rate_and_keeps_buffers_as_they_a
     torch.testing.assert_close(average.state_dict(model)["0.weight"], start + 6.0, atol=1e-5, rtol=0)
     with pytest.raises(ValueError, match="decay in"):
         WeightAverage(model, 1.0)
+
+
+def test_a_decay_outside_zero_to_one_is_one_clear_line(tiny_train_config, capsys):
+    config = tiny_train_config()
+    assert main(train_argv(config, "--optim.ema-decay", "1.5")) == 2
+    assert "--optim.ema-decay is 0 (no average) or in (0, 1), not 1.5" in capsys.readouterr().err
+    assert not (config.out / "checkpoints").exists()
 
 
 def test_a_run_with_an_average_saves_it_resumes_it_exactly_and_inference_uses_it(tiny_train_config, tmp_path):

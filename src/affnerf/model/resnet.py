@@ -93,7 +93,9 @@ class CodeEncoder(nn.Module):
             layer, ``second_head``): one trunk for two codes.
     """
 
-    def __init__(self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0, second_code: bool = False):
+    def __init__(
+        self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0, second_code: bool = False
+    ) -> None:
         super().__init__()
         self.backbone = ResNet18(width)
         self.head = nn.Linear(self.backbone.channels[-1], code_dim)

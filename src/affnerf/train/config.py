@@ -233,6 +233,8 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--points-weight-final needs --points-weight > 0 (the weight the schedule starts from)")
     if config.model.view_affordance_weight > 0 and config.input_jitter > 0:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
+    if not 0.0 <= config.optim.ema_decay < 1.0:
+        raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:
