@@ -28,8 +28,7 @@ for value in $LAMBDAS; do
 done
 wait
 for value in $LAMBDAS; do
-    (.venv/bin/affnerf eval calibrate --run "$W/lambda$value" --data "$DATA" --max-objects 32 --device cpu &&
-        val40 "lambda$value" "$W/lambda$value") > "$W/score_lambda$value.log" 2>&1 &
+    calibrated_val40 "lambda$value" "$W/lambda$value" > "$W/score_lambda$value.log" 2>&1 &
 done
 wait
 for value in $LAMBDAS; do echo "== λ $value"; sed -n 5,9p "$W/val40_lambda$value/table2.md"; done

@@ -37,8 +37,7 @@ timed_small_run own "${OWN_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field o
 timed_small_run shared "${SHARED_STEPS:?}" --cache-dir "$CACHE" --model.coarse-field shared "${EXTRA_ARGS[@]}" &
 wait
 for name in own shared; do
-    (.venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu &&
-        val40 "$name" "$W/$name" &&
+    (calibrated_val40 "$name" "$W/$name" &&
         { [[ "${SURFACE_ERRORS:-1}" == 0 ]] || .venv/bin/python benchmarks/surface_errors.py --data "$DATA" --run "$W/$name" \
             --out "$W/surface_errors_$name.json"; }) > "$W/score_$name.log" 2>&1 &
 done

@@ -77,6 +77,13 @@ val40() {
         --target-views 5 --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }
 
+# calibrated_val40 NAME RUN: RUN's mesh level calibrated on 32 validation objects (stored in its checkpoint), then
+# val40 of it as W/val40_NAME (shared_field.sh, weight_average.sh, affordance_weight.sh).
+calibrated_val40() {
+    .venv/bin/affnerf eval calibrate --run "$2" --data "$DATA" --max-objects 32 --device cpu
+    val40 "$1" "$2"
+}
+
 # test64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 test objects of DATA (8 per category), to W/test64_NAME:
 # a second, larger set of objects on which to check a difference val40 found.
 test64() {

@@ -48,8 +48,7 @@ cp "$W/$run/config.json" "$W/${run}_raw/"
 names=()
 for which in ${SCORE:-raw ema}; do names+=("$run$([[ "$which" == raw ]] && echo _raw)"); done
 for name in "${names[@]}"; do
-    .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
-    val40 "$name" "$W/$name"
+    calibrated_val40 "$name" "$W/$name"
     [[ "${SURFACE_ERRORS:-1}" == 0 ]] || .venv/bin/python benchmarks/surface_errors.py --data "$DATA" \
         --run "$W/$name" --out "$W/surface_errors_$name.json"
 done

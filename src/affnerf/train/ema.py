@@ -57,10 +57,8 @@ class WeightAverage:
 
     def state_dict(self, model: torch.nn.Module) -> dict[str, torch.Tensor]:
         """``model``'s state dict with the averaged parameters in place of its own (loadable into the model)."""
-        state = {k: v.detach().clone() for k, v in model.state_dict().items()}
-        for name, value in zip(self.names, self.average, strict=True):
-            state[name] = value.detach().clone()
-        return state
+        averaged = dict(zip(self.names, self.average, strict=True))
+        return {k: averaged.get(k, v).detach().clone() for k, v in model.state_dict().items()}
 
     def load_state_dict(self, state: dict[str, torch.Tensor], updates: int) -> None:
         """Restore the average written by :meth:`state_dict` after ``updates`` updates."""
