@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -31,3 +32,33 @@ def test_a_scheduled_points_weight_is_a_straight_line_between_its_ends(start, fi
     assert points_weight(c, 0) == pytest.approx(start) and points_weight(c, 200) == pytest.approx(final)
     assert points_weight(c, 50) == pytest.approx(0.75 * start + 0.25 * final)
     assert points_weight(c, -5) == pytest.approx(start) and points_weight(c, 400) == pytest.approx(final)
+
+
+def _optim_config(**kw) -> TrainConfig:
+    c = _config()
+    return replace(c, optim=replace(c.optim, lr=1e-3, lr_final=1e-5, **kw))
+
+
+def test_a_warm_up_rises_linearly_to_the_peak_then_the_decay_takes_the_remaining_steps():
+    c = _optim_config(warmup_steps=20)
+    assert learning_rate(c, 0) == pytest.approx(5e-5) and learning_rate(c, 9) == pytest.approx(5e-4)
+    assert learning_rate(c, 20) == pytest.approx(1e-3) and learning_rate(c, 200) == pytest.approx(1e-5)
+    assert learning_rate(c, 110) == pytest.approx((1e-3 * 1e-5) ** 0.5)  # the middle of the 180 decay steps
+
+
+def test_a_cosine_decay_stays_higher_than_the_exponential_one_between_its_ends():
+    cosine, exponential = _optim_config(schedule="cosine"), _optim_config()
+    assert learning_rate(cosine, 0) == pytest.approx(1e-3) and learning_rate(cosine, 200) == pytest.approx(1e-5)
+    assert learning_rate(cosine, 100) == pytest.approx(0.5 * (1e-3 + 1e-5))
+    rates = [learning_rate(cosine, s) for s in range(201)]
+    assert all(a >= b for a, b in zip(rates, rates[1:], strict=False))
+    assert all(learning_rate(cosine, s) > learning_rate(exponential, s) for s in range(1, 180))
+
+
+def test_a_warm_up_as_long_as_the_run_is_refused_with_one_line(tmp_path, capsys):
+    from affnerf.cli.main import main
+
+    argv = ["train", "--data", str(tmp_path), "--out", str(tmp_path / "run"), "--steps", "10"]
+    assert main([*argv, "--optim.warmup-steps", "10"]) == 2
+    assert "--optim.warmup-steps must be in [0, --steps), not 10" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()

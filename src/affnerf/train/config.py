@@ -19,11 +19,15 @@ from affnerf.train.precision import Precision
 
 @dataclass(frozen=True)
 class OptimConfig:
-    """Adam with an exponential learning-rate decay.
+    """Adam with a learning-rate schedule (:func:`affnerf.train.schedule.learning_rate`).
 
     Attributes:
-        lr: initial learning rate.
-        lr_final: learning rate reached at the last step (decays exponentially from ``lr``).
+        lr: learning rate at the start of the decay (the peak, after any warm-up).
+        lr_final: learning rate reached at the last step.
+        schedule: how the rate falls from ``lr`` to ``lr_final``: ``exponential`` (a constant factor a step, the
+            presets) or ``cosine`` (half a cosine: slow at first, so more steps at a high rate).
+        warmup_steps: steps over which the rate first rises linearly from ``lr``/``warmup_steps`` to ``lr``
+            (0 = none); the decay takes the steps after them.
         grad_clip: clip the gradient norm to this (0 = no clipping).
         ema_decay: keep an exponential moving average of the weights with this decay per step (0 = none; e.g.
             0.999 averages about the last thousand steps; :mod:`affnerf.train.ema`). Checkpoints then hold it
@@ -32,6 +36,8 @@ class OptimConfig:
 
     lr: float = 5e-4
     lr_final: float = 5e-5
+    schedule: Literal["exponential", "cosine"] = "exponential"
+    warmup_steps: int = 0
     grad_clip: float = 0.0
     ema_decay: float = 0.0
 
@@ -235,6 +241,8 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
     if not 0.0 <= config.optim.ema_decay < 1.0:
         raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
+    if not 0 <= config.optim.warmup_steps < max(config.steps, 1):
+        raise AffnerfError(f"--optim.warmup-steps must be in [0, --steps), not {config.optim.warmup_steps}")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

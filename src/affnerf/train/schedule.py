@@ -6,6 +6,8 @@ fresh one take the same values at the same step.
 
 from __future__ import annotations
 
+import math
+
 from affnerf.train.config import TrainConfig
 
 
@@ -15,7 +17,8 @@ def _progress(config: TrainConfig, step: int) -> float:
 
 
 def learning_rate(config: TrainConfig, step: int) -> float:
-    """Exponential decay from ``optim.lr`` at step 0 to ``optim.lr_final`` at the last step (constant after).
+    """The rate of ``step``: a linear rise over ``optim.warmup_steps`` steps (if any) to ``optim.lr``, then a fall
+    to ``optim.lr_final`` at the last step, exponential or half a cosine (``optim.schedule``); constant after.
 
     Example:
         >>> from pathlib import Path
@@ -25,7 +28,14 @@ def learning_rate(config: TrainConfig, step: int) -> float:
         >>> learning_rate(c, 250) == learning_rate(c, 100)
         True
     """
-    return config.optim.lr * (config.optim.lr_final / config.optim.lr) ** _progress(config, step)
+    optim = config.optim
+    warm = optim.warmup_steps
+    if step < warm:
+        return optim.lr * (step + 1) / warm
+    frac = min(max((step - warm) / max(config.steps - warm, 1), 0.0), 1.0)
+    if optim.schedule == "cosine":
+        return optim.lr_final + (optim.lr - optim.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+    return optim.lr * (optim.lr_final / optim.lr) ** frac
 
 
 def points_weight(config: TrainConfig, step: int) -> float:
