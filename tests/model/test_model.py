@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from affnerf.errors import AffnerfError
-from affnerf.model.affnerf import AffNeRF
+from affnerf.model.affnerf import AffNeRF, noisy_codes
 from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
 from affnerf.model.field import ConditionalField, ObjectCodes
@@ -242,3 +242,28 @@ def test_one_encoder_gives_both_codes_from_one_trunk_and_both_heads_learn():
 def test_only_aff_nerf_merges_its_encoders():
     with pytest.raises(AffnerfError, match="merges AFF-NeRF's two encoders"):
         build_model(replace(SMALL, kind="pixelnerf", encoders="one"), 3)
+
+
+def test_code_noise_perturbs_training_codes_in_proportion_to_their_spread_and_never_inference_codes():
+    torch.manual_seed(0)
+    codes = torch.randn(4096, 3) * torch.tensor([0.1, 1.0, 10.0])
+    noise = noisy_codes(codes, 0.2) - codes
+    torch.testing.assert_close(noise.std(dim=0), 0.2 * codes.std(dim=0), rtol=0.05, atol=0)
+    assert noise.mean(dim=0).abs().max() < 0.02 * 10
+    assert torch.equal(noisy_codes(codes[:1], 0.2), codes[:1])
+    model = AffNeRF(replace(SMALL, code_noise=0.5), num_classes=3)
+    images = torch.rand(3, 3, 32, 32)
+    model.eval()
+    with torch.no_grad():
+        a, b = model.encode(images), model.encode(images)
+    torch.testing.assert_close(a.shape, b.shape)
+    model.train()
+    noisy = model.encode(images)
+    assert not torch.allclose(noisy.shape, a.shape) and not torch.allclose(noisy.appearance, a.appearance)
+
+
+def test_code_noise_is_refused_for_other_models_and_below_zero():
+    with pytest.raises(AffnerfError, match="--model.code-noise"):
+        build_model(replace(SMALL, kind="pixelnerf", code_noise=0.1), 3)
+    with pytest.raises(AffnerfError, match="--model.code-noise"):
+        build_model(replace(SMALL, code_noise=-0.1), 3)

@@ -32,6 +32,15 @@ class LabelledCodes(Codes):
     view_logits: torch.Tensor
 
 
+def noisy_codes(codes: torch.Tensor, scale: float) -> torch.Tensor:
+    """(B, D) codes plus Gaussian noise whose standard deviation in each dimension is ``scale`` times that
+    dimension's standard deviation over the B codes (detached: the noise does not shrink the spread); the codes
+    unchanged for B < 2 or ``scale`` 0. Draws from torch's global generator (saved in checkpoints)."""
+    if scale <= 0 or codes.shape[0] < 2:
+        return codes
+    return codes + scale * codes.detach().std(dim=0, keepdim=True) * torch.randn_like(codes)
+
+
 class AffNeRF(ConditionedNeRF):
     """Two ResNet18 encoders (or, with ``encoders`` ``one``, one with two linear heads) and a coarse and a fine
     field conditioned on their codes.
@@ -63,11 +72,17 @@ class AffNeRF(ConditionedNeRF):
 
     def encode(self, images: torch.Tensor) -> Codes:
         """(B, 3, S, S) object crops in [0, 1] -> their codes; while training a model with a pixel-labelling head,
-        :class:`LabelledCodes` with the crops' (B, C, S / 4, S / 4) logits."""
+        :class:`LabelledCodes` with the crops' (B, C, S / 4, S / 4) logits; while training with ``code_noise``,
+        the codes with noise added (:func:`noisy_codes`)."""
         shape, appearance, logits = self.shape_encoder.encode_both(images, labels=self.training)
         if self.appearance_encoder is not None:
             appearance = self.appearance_encoder(images)
         assert appearance is not None  # one encoder gives both codes
+        if self.training and self.config.code_noise > 0:
+            shape, appearance = (
+                noisy_codes(shape, self.config.code_noise),
+                noisy_codes(appearance, self.config.code_noise),
+            )
         return Codes(shape, appearance) if logits is None else LabelledCodes(shape, appearance, logits)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Codes:

@@ -85,6 +85,10 @@ class ModelConfig:
         encoders: AFF-NeRF only: ``two`` ResNet18 encoders, one for the shape code and one for the appearance code
             (the paper), or, beyond the paper, ``one`` whose pooled features give both codes through two linear
             layers (pixelNeRF's single encoder): a step saves one encoder's forward and backward pass.
+        code_noise: AFF-NeRF only, training only: Gaussian noise added to each code of a step, its standard
+            deviation this times the spread (standard deviation) of that code dimension over the step's objects
+            (0 = none, the paper). Beyond the paper: the decoder learns to give a plausible object for codes near
+            the training objects' ones, as an encoder's code for a new object is (a denoising regulariser).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -116,6 +120,7 @@ class ModelConfig:
     plane_resolution: int = 64
     plane_channels: int = 16
     encoders: Literal["two", "one"] = "two"
+    code_noise: float = 0.0
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint
@@ -134,4 +139,5 @@ NON_ARCHITECTURE_FIELDS = (
     "surface_optical_depth",
     "occupancy_density",
     "projection_camera",
+    "code_noise",
 )

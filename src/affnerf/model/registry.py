@@ -45,9 +45,10 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
 
     Raises:
         ValueError: for a kind no class is registered under.
-        AffnerfError: for ``triplane`` conditioning, a ``view_affordance_weight`` or ``encoders`` ``one`` of another
-            kind than ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes, only its encoder labels
-            pixels, and only it has the two encoders that ``one`` merges).
+        AffnerfError: for ``triplane`` conditioning, a ``view_affordance_weight``, ``encoders`` ``one`` or a
+            ``code_noise`` of another kind than ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes,
+            only its encoder labels pixels, only it has the two encoders that ``one`` merges and the two global
+            codes the noise is added to), or a negative ``code_noise``.
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
@@ -57,4 +58,8 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
         raise AffnerfError(f"--model.view-affordance-weight labels AFF-NeRF's input crops, not a {config.kind} model's")
     if config.encoders == "one" and config.kind != "affnerf":
         raise AffnerfError(f"--model.encoders one merges AFF-NeRF's two encoders; a {config.kind} model has its own")
+    if config.code_noise and (config.kind != "affnerf" or config.code_noise < 0):
+        raise AffnerfError(
+            f"--model.code-noise is >= 0 and for AFF-NeRF's codes, not {config.code_noise} of {config.kind}"
+        )
     return MODEL_KINDS[config.kind](config, num_classes)
