@@ -55,10 +55,15 @@ def test_a_cosine_decay_stays_higher_than_the_exponential_one_between_its_ends()
     assert all(learning_rate(cosine, s) > learning_rate(exponential, s) for s in range(1, 180))
 
 
-def test_a_warm_up_as_long_as_the_run_is_refused_with_one_line(tmp_path, capsys):
+def test_a_warm_up_takes_at_most_a_tenth_of_a_short_run():
+    c = _optim_config(warmup_steps=300)  # 200 steps: 20 of warm-up
+    assert learning_rate(c, 9) == pytest.approx(5e-4) and learning_rate(c, 20) == pytest.approx(1e-3)
+
+
+def test_a_negative_warm_up_is_refused_with_one_line(tmp_path, capsys):
     from affnerf.cli.main import main
 
     argv = ["train", "--data", str(tmp_path), "--out", str(tmp_path / "run"), "--steps", "10"]
-    assert main([*argv, "--optim.warmup-steps", "10"]) == 2
-    assert "--optim.warmup-steps must be in [0, --steps), not 10" in capsys.readouterr().err
+    assert main([*argv, "--optim.warmup-steps", "-1"]) == 2
+    assert "--optim.warmup-steps is a number of steps (>= 0), not -1" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()

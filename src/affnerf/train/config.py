@@ -26,8 +26,8 @@ class OptimConfig:
         lr_final: learning rate reached at the last step.
         schedule: how the rate falls from ``lr`` to ``lr_final``: ``exponential`` (a constant factor a step, the
             presets) or ``cosine`` (half a cosine: slow at first, so more steps at a high rate).
-        warmup_steps: steps over which the rate first rises linearly from ``lr``/``warmup_steps`` to ``lr``
-            (0 = none); the decay takes the steps after them.
+        warmup_steps: steps over which the rate first rises linearly to ``lr`` (0 = none; at most a tenth of the
+            run's ``steps`` are used, so a short run of a preset still decays); the decay takes the steps after.
         grad_clip: clip the gradient norm to this (0 = no clipping).
         ema_decay: keep an exponential moving average of the weights with this decay per step (0 = none; e.g.
             0.999 averages about the last thousand steps; :mod:`affnerf.train.ema`). Checkpoints then hold it
@@ -241,8 +241,8 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
     if not 0.0 <= config.optim.ema_decay < 1.0:
         raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
-    if not 0 <= config.optim.warmup_steps < max(config.steps, 1):
-        raise AffnerfError(f"--optim.warmup-steps must be in [0, --steps), not {config.optim.warmup_steps}")
+    if config.optim.warmup_steps < 0:
+        raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

@@ -17,8 +17,9 @@ def _progress(config: TrainConfig, step: int) -> float:
 
 
 def learning_rate(config: TrainConfig, step: int) -> float:
-    """The rate of ``step``: a linear rise over ``optim.warmup_steps`` steps (if any) to ``optim.lr``, then a fall
-    to ``optim.lr_final`` at the last step, exponential or half a cosine (``optim.schedule``); constant after.
+    """The rate of ``step``: a linear rise to ``optim.lr`` over ``optim.warmup_steps`` steps (at most a tenth of
+    ``steps``; 0 = none), then a fall to ``optim.lr_final`` at the last step, exponential or half a cosine
+    (``optim.schedule``); constant after.
 
     Example:
         >>> from pathlib import Path
@@ -29,7 +30,7 @@ def learning_rate(config: TrainConfig, step: int) -> float:
         True
     """
     optim = config.optim
-    warm = optim.warmup_steps
+    warm = min(optim.warmup_steps, config.steps // 10)
     if step < warm:
         return optim.lr * (step + 1) / warm
     frac = min(max((step - warm) / max(config.steps - warm, 1), 0.0), 1.0)
