@@ -25,7 +25,8 @@ class OptimConfig:
         lr: learning rate at the start of the decay (the peak, after any warm-up).
         lr_final: learning rate reached at the last step.
         schedule: how the rate falls from ``lr`` to ``lr_final``: ``exponential`` (a constant factor a step, the
-            presets) or ``cosine`` (half a cosine: slow at first, so more steps at a high rate).
+            ``paper`` preset) or ``cosine`` (half a cosine: slow at first, so more steps at a high rate; the
+            ``small`` preset, at a peak of 2e-3 after 300 warm-up steps: benchmarks/results/learning_rate_schedule.md).
         warmup_steps: steps over which the rate first rises linearly to ``lr`` (0 = none; at most a tenth of the
             run's ``steps`` are used, so a short run of a preset still decays); the decay takes the steps after.
         grad_clip: clip the gradient norm to this (0 = no clipping).
@@ -202,7 +203,7 @@ SMALL = replace(
         geometry="sdf",
         coarse_field="shared",
     ),
-    optim=OptimConfig(lr=1e-3, lr_final=2e-5),
+    optim=OptimConfig(lr=2e-3, lr_final=2e-5, schedule="cosine", warmup_steps=300),
     objects_per_step=8,
     rays_per_step=256,
     affordance_weight=4e-2,
