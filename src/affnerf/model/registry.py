@@ -58,8 +58,8 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
         raise AffnerfError(f"--model.view-affordance-weight labels AFF-NeRF's input crops, not a {config.kind} model's")
     if config.encoders == "one" and config.kind != "affnerf":
         raise AffnerfError(f"--model.encoders one merges AFF-NeRF's two encoders; a {config.kind} model has its own")
-    if config.code_noise and (config.kind != "affnerf" or config.code_noise < 0):
-        raise AffnerfError(
-            f"--model.code-noise is >= 0 and for AFF-NeRF's codes, not {config.code_noise} of {config.kind}"
-        )
+    if config.code_noise < 0:
+        raise AffnerfError(f"--model.code-noise is a share of the codes' spread (>= 0), not {config.code_noise}")
+    if config.code_noise > 0 and config.kind != "affnerf":
+        raise AffnerfError(f"--model.code-noise perturbs AFF-NeRF's two global codes; a {config.kind} model has none")
     return MODEL_KINDS[config.kind](config, num_classes)
