@@ -11,9 +11,20 @@ import math
 from affnerf.train.config import TrainConfig
 
 
-def _progress(config: TrainConfig, step: int) -> float:
-    """Fraction of the schedule done at ``step``: 0 at the first step, 1 at ``steps`` and after."""
-    return min(max(step / max(config.steps, 1), 0.0), 1.0)
+def _progress(step: int, start: int, end: int) -> float:
+    """Fraction of the span from step ``start`` to step ``end`` done at ``step``: 0 at ``start`` and before, 1 at
+    ``end`` and after."""
+    return min(max((step - start) / max(end - start, 1), 0.0), 1.0)
+
+
+def cosine_fall(high: float, low: float, frac: float) -> float:
+    """Half a cosine from ``high`` at ``frac`` 0 to ``low`` at ``frac`` 1 (the training and segmenter schedules).
+
+    Example:
+        >>> cosine_fall(1.0, 0.0, 0.0), cosine_fall(1.0, 0.0, 0.5), cosine_fall(1.0, 0.0, 1.0)
+        (1.0, 0.5, 0.0)
+    """
+    return low + (high - low) * 0.5 * (1.0 + math.cos(math.pi * frac))
 
 
 def learning_rate(config: TrainConfig, step: int) -> float:
@@ -33,9 +44,9 @@ def learning_rate(config: TrainConfig, step: int) -> float:
     warm = min(optim.warmup_steps, config.steps // 10)
     if step < warm:
         return optim.lr * (step + 1) / warm
-    frac = min(max((step - warm) / max(config.steps - warm, 1), 0.0), 1.0)
+    frac = _progress(step, warm, config.steps)
     if optim.schedule == "cosine":
-        return optim.lr_final + (optim.lr - optim.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+        return cosine_fall(optim.lr, optim.lr_final, frac)
     return optim.lr * (optim.lr_final / optim.lr) ** frac
 
 
@@ -53,5 +64,5 @@ def points_weight(config: TrainConfig, step: int) -> float:
     """
     if config.points_weight_final < 0:
         return config.points_weight
-    frac = _progress(config, step)
+    frac = _progress(step, 0, config.steps)
     return (1.0 - frac) * config.points_weight + frac * config.points_weight_final

@@ -13,7 +13,6 @@ background, give the mask IoU logged while training; the photographs held out in
 from __future__ import annotations
 
 import logging
-import math
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -38,6 +37,7 @@ from affnerf.model.segmenter import (
 )
 from affnerf.train.augment import blur_and_noise, jitter_colour
 from affnerf.train.precision import Precision, forward_precision
+from affnerf.train.schedule import cosine_fall
 
 logger = logging.getLogger(__name__)
 
@@ -178,7 +178,7 @@ def learning_rate(peak: float, step: int, steps: int) -> float:
     warm = min(100, steps // 20)
     if step < warm:
         return peak * (step + 1) / warm
-    return peak * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * step / steps)))
+    return cosine_fall(peak, 0.05 * peak, step / steps)
 
 
 def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
