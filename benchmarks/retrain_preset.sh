@@ -6,7 +6,9 @@
 # val40 of both side by side, then the 64 test objects of both side by side (side_by_side.sh), one core each.
 #   DATA=... [WORK=...] [STEPS=20500] benchmarks/retrain_preset.sh
 # REFERENCE: more weights scored by val40 after the pairs (for instance the old preset's first stage,
-# `git show 29fc4da:benchmarks/candidates/affnerf-small-sdf-v4.pt`). SKIP_TRAINING=1 only evaluates.
+# `git show 29fc4da:benchmarks/candidates/affnerf-small-sdf-v4.pt`). FURTHER_STEPS: also a further stage of that
+# many steps on one core (a fresh Adam 2e-4 -> 2e-5), calibrated and scored the same way. SKIP_TRAINING=1 only
+# evaluates. Writes W/retrain_preset.json: every score's metrics without confusion matrices.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -31,11 +33,36 @@ wait
 test64 run "$W/run" &
 test64 shipped "$SHIPPED" &
 wait
+if [ "${FURTHER_STEPS:-0}" -gt 0 ]; then
+    calibrated_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0
+    rm -rf "$W/val40_stage" "$W/test64_stage"
+    val40 stage "$W/stage" &
+    test64 stage "$W/stage" &
+    wait
+fi
 if [ -n "${REFERENCE:-}" ]; then
     rm -rf "$W/val40_reference"
     val40 reference "$REFERENCE"
 fi
-for name in val40_run val40_shipped test64_run test64_shipped ${REFERENCE:+val40_reference}; do
+names=(val40_run val40_shipped test64_run test64_shipped)
+[ "${FURTHER_STEPS:-0}" -gt 0 ] && names+=(val40_stage test64_stage)
+[ -n "${REFERENCE:-}" ] && names+=(val40_reference)
+.venv/bin/python - "$W" "${names[@]}" <<'PY'
+import json
+import sys
+
+
+def without_confusion(value):
+    if isinstance(value, dict):
+        return {k: without_confusion(v) for k, v in value.items() if k != "confusion"}
+    return value
+
+
+work, names = sys.argv[1], sys.argv[2:]
+scores = {name: without_confusion(json.load(open(f"{work}/{name}/metrics_affnerf.json"))) for name in names}
+json.dump(scores, open(f"{work}/retrain_preset.json", "w"), indent=1)
+PY
+for name in "${names[@]}"; do
     echo "== $name"
     sed -n 5,9p "$W/$name/table2.md"
 done
