@@ -42,21 +42,7 @@ done
 wait
 scores=()
 for name in "${names[@]}"; do scores+=("val40_$name" "test64_$name"); done
-.venv/bin/python - "$W" "${scores[@]}" <<'PY'
-import json
-import sys
-
-
-def without_confusion(value):
-    if isinstance(value, dict):
-        return {k: without_confusion(v) for k, v in value.items() if k != "confusion"}
-    return value
-
-
-work, names = sys.argv[1], sys.argv[2:]
-scores = {name: without_confusion(json.load(open(f"{work}/{name}/metrics_affnerf.json"))) for name in names}
-json.dump(scores, open(f"{work}/further_stage_candidate.json", "w"), indent=1)
-PY
+merge_scores "$W/further_stage_candidate.json" "${scores[@]}"
 for name in "${scores[@]}"; do
     echo "== $name"
     sed -n 5,9p "$W/$name/table2.md"

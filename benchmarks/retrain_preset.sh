@@ -47,21 +47,7 @@ fi
 names=(val40_run val40_shipped test64_run test64_shipped)
 [ "${FURTHER_STEPS:-0}" -gt 0 ] && names+=(val40_stage test64_stage)
 [ -n "${REFERENCE:-}" ] && names+=(val40_reference)
-.venv/bin/python - "$W" "${names[@]}" <<'PY'
-import json
-import sys
-
-
-def without_confusion(value):
-    if isinstance(value, dict):
-        return {k: without_confusion(v) for k, v in value.items() if k != "confusion"}
-    return value
-
-
-work, names = sys.argv[1], sys.argv[2:]
-scores = {name: without_confusion(json.load(open(f"{work}/{name}/metrics_affnerf.json"))) for name in names}
-json.dump(scores, open(f"{work}/retrain_preset.json", "w"), indent=1)
-PY
+merge_scores "$W/retrain_preset.json" "${names[@]}"
 for name in "${names[@]}"; do
     echo "== $name"
     sed -n 5,9p "$W/$name/table2.md"

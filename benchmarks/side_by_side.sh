@@ -112,3 +112,25 @@ scored_stage() {
         --categories "${GRASP_CATEGORIES:-bucket,cabinet,teapot,eyeglasses}" --no-pictures --device cpu \
         --out "$W/grasp_$name"
 }
+
+# merge_scores OUT NAME...: the AFF-NeRF metrics of each W/NAME (an eval folder) in one JSON file OUT keyed by NAME,
+# without confusion matrices (retrain_preset.sh, further_stage_candidate.sh).
+merge_scores() {
+    local out=$1
+    shift
+    .venv/bin/python - "$W" "$out" "$@" <<'PY'
+import json
+import sys
+
+
+def without_confusion(value):
+    if isinstance(value, dict):
+        return {k: without_confusion(v) for k, v in value.items() if k != "confusion"}
+    return value
+
+
+work, out, names = sys.argv[1], sys.argv[2], sys.argv[3:]
+scores = {name: without_confusion(json.load(open(f"{work}/{name}/metrics_affnerf.json"))) for name in names}
+json.dump(scores, open(out, "w"), indent=1)
+PY
+}
