@@ -2,9 +2,10 @@
 # The shipped recipe's further stage (19,000 steps of one core, a fresh Adam) given to the committed candidate
 # `benchmarks/candidates/affnerf-small-cosine.pt` (the preset as it is now trained from scratch for 20,500 steps of
 # two processes, retrain_preset.sh), at the recipe's peak learning rate and at a higher one, the two stages side by
-# side on one core each; then each calibrated (32 validation objects), val40 and the 64 test objects of each side by
-# side (issue 12; results/further_stage_candidate.md). The shipped weights' figures of the same protocols are in
-# results/retrain_preset.json (the evaluation is deterministic: val40 of them reproduced their committed 0.647).
+# side on one core each; then each calibrated (32 validation objects), and val40 and the 64 test objects of every
+# stage run at once (issue 12; results/further_stage_candidate.md). The shipped weights' figures of the same
+# protocols are in results/retrain_preset.json (the evaluation is deterministic: val40 of them reproduced their
+# committed 0.647).
 #   DATA=... [WORK=...] [STEPS=19000] [LRS="2e-4 6e-4"] [INIT=WEIGHTS] benchmarks/further_stage_candidate.sh
 # INIT: other weights to start from; STAGE_OPTIONS: more training options (a warm restart of the shipped weights, which
 # have a coarse field of their own: INIT=src/affnerf/weights/affnerf-small.pt STAGE_OPTIONS="--model.coarse-field own").
@@ -31,12 +32,8 @@ for lr in "${LRS[@]}"; do
 done
 wait
 for name in "${names[@]}"; do
-    rm -rf "$W/val40_$name"
+    rm -rf "$W/val40_$name" "$W/test64_$name"
     val40 "$name" "$W/$name" &
-done
-wait
-for name in "${names[@]}"; do
-    rm -rf "$W/test64_$name"
     test64 "$name" "$W/$name" &
 done
 wait
