@@ -2,8 +2,8 @@
 # The shipped recipe's further stage (19,000 steps of one core, a fresh Adam) given to the committed candidate
 # `benchmarks/candidates/affnerf-small-cosine.pt` (the preset as it is now trained from scratch for 20,500 steps of
 # two processes, retrain_preset.sh), at the recipe's peak learning rate and at a higher one, the two stages side by
-# side on one core each; then each calibrated (32 validation objects), and val40 and the 64 test objects of every
-# stage run at once (issue 12; results/further_stage_candidate.md). The shipped weights' figures of the same
+# side on one core each; each then calibrated (32 validation objects) and scored by val40 and the 64 test objects
+# side by side (issue 12; results/further_stage_candidate.md). The shipped weights' figures of the same
 # protocols are in results/retrain_preset.json (the evaluation is deterministic: val40 of them reproduced their
 # committed 0.647).
 #   DATA=... [WORK=...] [STEPS=19000] [LRS="2e-4 6e-4"] [INIT=WEIGHTS] benchmarks/further_stage_candidate.sh
@@ -23,22 +23,15 @@ export OMP_NUM_THREADS=1
 source benchmarks/side_by_side.sh
 mkdir -p "$W"
 
-names=()
+read -r -a STAGE_OPTS <<< "${STAGE_OPTIONS:-}"
+scores=()
 for lr in "${LRS[@]}"; do
     # a later --optim.lr overrides calibrated_stage's 2e-4
-    calibrated_stage "stage_$lr" "$CANDIDATE" "$STEPS" "$CACHE" --checkpoint-every 1000 --keep-checkpoints 2 \
-        --val-every 0 --optim.lr "$lr" ${STAGE_OPTIONS:-} > "$W/stage_$lr.log" 2>&1 &
-    names+=("stage_$lr")
+    scored_further_stage "stage_$lr" "$CANDIDATE" "$STEPS" "$CACHE" --checkpoint-every 1000 --keep-checkpoints 2 \
+        --val-every 0 --optim.lr "$lr" "${STAGE_OPTS[@]}" > "$W/stage_$lr.log" 2>&1 &
+    scores+=("val40_stage_$lr" "test64_stage_$lr")
 done
 wait
-for name in "${names[@]}"; do
-    rm -rf "$W/val40_$name" "$W/test64_$name"
-    val40 "$name" "$W/$name" &
-    test64 "$name" "$W/$name" &
-done
-wait
-scores=()
-for name in "${names[@]}"; do scores+=("val40_$name" "test64_$name"); done
 merge_scores "$W/further_stage_candidate.json" "${scores[@]}"
 for name in "${scores[@]}"; do
     echo "== $name"

@@ -34,11 +34,7 @@ test64 run "$W/run" &
 test64 shipped "$SHIPPED" &
 wait
 if [ "${FURTHER_STEPS:-0}" -gt 0 ]; then
-    calibrated_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0
-    rm -rf "$W/val40_stage" "$W/test64_stage"
-    val40 stage "$W/stage" &
-    test64 stage "$W/stage" &
-    wait
+    scored_further_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0
 fi
 if [ -n "${REFERENCE:-}" ]; then
     rm -rf "$W/val40_reference"

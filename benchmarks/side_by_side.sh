@@ -35,6 +35,17 @@ calibrated_stage() {
     .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
 }
 
+# scored_further_stage NAME INIT STEPS CACHE [TRAIN OPTIONS...]: calibrated_stage, then val40 and the 64 test
+# objects of it side by side, as W/val40_NAME and W/test64_NAME (retrain_preset.sh, further_stage_candidate.sh).
+scored_further_stage() {
+    local name=$1
+    calibrated_stage "$@"
+    rm -rf "$W/val40_$name" "$W/test64_$name"
+    val40 "$name" "$W/$name" &
+    test64 "$name" "$W/$name" &
+    wait
+}
+
 # score_runs NAME...: every checkpoint of each W/NAME on the ladder's validation objects, the runs side by side;
 # writes W/score_NAME.json and all of them in one W/scores.json (the results file).
 score_runs() {
