@@ -1,8 +1,8 @@
 """Choose a planner setting of ``affnerf eval grasp`` on validation objects (issue 13): the part margin
 (``--part-margin``, ``PlanConfig.part_margin``), the width clearance on predicted models (``--predicted-clearance``,
 ``PlanConfig.width_clearance``) or the least label confidence of restricted grasps on predicted models
-(``--min-confidence``, ``PlanConfig.min_confidence``), or a second model whose own prediction must confirm the
-predicted task part (``--second-opinion``, a run or checkpoint; ``none`` = without).
+(``--min-confidence``, ``PlanConfig.min_confidence``). (A fourth setting, ``--second-opinion``, measured in
+benchmarks/results/grasp_second_opinion.md, was removed with the option: see that file's provenance.)
 
 Runs ``affnerf eval grasp`` on the validation split (no pictures; no physics unless ``--lift``) once per value, two
 runs at a time on one thread each, and tabulates, per value, the share of task-part grasps with both contacts on the
@@ -18,8 +18,7 @@ Usage::
         --values 0.004 0.015 0.025 --lift --results benchmarks/results/grasp_clearance
     python benchmarks/grasp_margin.py --data DATA --out benchmarks/.work/confidence --setting min-confidence \
         --values 0 0.8 0.9 0.95 --results benchmarks/results/grasp_confidence
-    python benchmarks/grasp_margin.py --data DATA --out benchmarks/.work/opinion --setting second-opinion \
-        --values none benchmarks/candidates/affnerf-small-cosine-stage.pt --seed 1 --results /tmp/opinion_seed1
+    python benchmarks/grasp_margin.py --data DATA --out benchmarks/.work/margin_seed1 --values 0 0.01 --seed 1
 """
 
 from __future__ import annotations
@@ -39,14 +38,14 @@ TITLES = {
     "part-margin": "Part margin of restricted grasps",
     "predicted-clearance": "Width clearance on predicted models",
     "min-confidence": "Least label confidence of restricted grasps on predicted models",
-    "second-opinion": "A second model confirming the predicted task part",
 }
 #: Unit of each setting's values in the tables.
-UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": "", "second-opinion": ""}
+UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": ""}
 
 
 def label(value: str) -> str:
-    """A setting's value as its table row names it: a number in its shortest form, a path by its file name."""
+    """A setting's value as its table row names it: a number in its shortest form (anything else by its file
+    name)."""
     try:
         return f"{float(value):g}"
     except ValueError:
@@ -54,8 +53,8 @@ def label(value: str) -> str:
 
 
 def setting_flags(setting: str, value: str) -> list[str]:
-    """The ``eval grasp`` flags of one value (``second-opinion none``: no flag, the planner as shipped)."""
-    return [] if setting == "second-opinion" and value == "none" else [f"--{setting}", value]
+    """The ``eval grasp`` flags of one value."""
+    return [f"--{setting}", value]
 
 
 def run_one(args: argparse.Namespace, margin: str) -> tuple[str, Path, float | None]:

@@ -79,34 +79,6 @@ def test_the_true_mesh_takes_the_predicted_fields_labels(trained_runs, train_dat
     assert with_predicted_labels(prediction, true, agreement=False).face_agrees is None
 
 
-def test_a_second_opinion_confirms_only_where_both_models_agree(trained_runs, train_dataset):
-    from affnerf.data.dataset import Dataset
-    from affnerf.eval.grasps import predict_object, predicted_object, with_predicted_labels
-    from affnerf.grasp.target import GraspObject
-    from affnerf.meshio import read_labelled_ply
-    from affnerf.predict.loading import load_model
-    from affnerf.predict.mesh import label_faces
-
-    ds = Dataset.open(train_dataset)
-    obj = ds.load_object(ds.objects("train", ["screwdriver"])[0])
-    true = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), "true")
-    loaded = load_model(trained_runs["affnerf"], "cpu")
-    alone = predict_object(loaded, obj, 0, fit_steps=2)
-    # the same run as its own second opinion: its encoder's codes again, so it confirms what the first does
-    same = predict_object(loaded, obj, 0, fit_steps=2, second=load_model(trained_runs["affnerf"], "cpu"))
-    assert same.second is not None and alone.second is None
-    assert np.array_equal(with_predicted_labels(same, true).face_agrees, with_predicted_labels(alone, true).face_agrees)
-    assert np.array_equal(
-        predicted_object(same, "s", 32, agreement_distance=0.01).face_agrees,
-        predicted_object(alone, "s", 32, agreement_distance=0.01).face_agrees,
-    )
-    # a second model whose field gives every face another label confirms nothing
-    other_model, codes = same.second
-    relabelled = with_predicted_labels(same, true)
-    second_labels = label_faces(true.vertices, true.faces, other_model.point_fields(codes)[1])
-    assert not (relabelled.face_agrees & (second_labels != relabelled.face_affordance)).any()
-
-
 def _cond(eps, on, lift):
     return {"grasps": len(eps), "epsilon": eps, "on_part": on, "lift": lift}
 

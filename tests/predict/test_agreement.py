@@ -57,16 +57,3 @@ def test_a_confirmed_mesh_carries_the_agreement_to_the_grasp_planner(tmp_path):
     obj = GraspObject.from_mesh(read_labelled_ply(tmp_path / "m.ply"))
     assert np.array_equal(obj.face_agrees, centre_x < 0)
     assert GraspObject.from_mesh(mesh).face_agrees is None
-
-
-def test_several_other_predictions_confirm_a_face_only_where_every_one_does():
-    vertices, faces = _strip()
-    centre_x = vertices[faces].mean(axis=1)[:, 0]
-    mesh = LabelledMesh(vertices, faces, face_props={"affordance": np.ones(len(faces), np.uint8)})
-    left = LabelledMesh(vertices, faces, face_props={"affordance": np.where(centre_x < 0.1, 1, 3).astype(np.uint8)})
-    right = LabelledMesh(vertices, faces, face_props={"affordance": np.where(centre_x > -0.1, 1, 3).astype(np.uint8)})
-    both = confirmed(mesh, [left, right], 0.01).face_props["confirmed"]
-    assert np.array_equal(both, (np.abs(centre_x) < 0.1).astype(np.uint8))
-    assert np.array_equal(
-        confirmed(mesh, [left], 0.01).face_props["confirmed"], confirmed(mesh, left, 0.01).face_props["confirmed"]
-    )

@@ -88,10 +88,6 @@ class GraspEvalConfig:
         agreement_distance: with ``fit_steps``, the task part is planned first on the faces the encoder's own
             prediction confirms (same label within this distance, canonical frame;
             :func:`~affnerf.predict.agreement.agreeing_faces`); 0 = off.
-        second_opinion: a second, independently trained run (None: off). With ``fit_steps`` and
-            ``agreement_distance``, a face counts as confirmed only where that model's own prediction from the same
-            view (its encoder's codes) gives the same label there too: a committee of two models, whose
-            disagreements mark where one of them is wrong.
         predicted_clearance: on the predicted models, grasps stay this far (metres) below the gripper's opening
             (:class:`~affnerf.grasp.planner.PlanConfig` ``width_clearance``; a true mesh keeps the planner's
             default), because a section the model makes too narrow may not fit the gripper on the true object
@@ -127,7 +123,6 @@ class GraspEvalConfig:
     part_margin: float = PART_MARGIN
     fit_steps: int = 30
     agreement_distance: float = AGREEMENT_DISTANCE
-    second_opinion: Path | None = None
     predicted_clearance: float = PREDICTED_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
     rank: Literal["epsilon", "hold"] = RANK
@@ -143,36 +138,25 @@ class Prediction:
         first: the encoder's codes of the view.
         encoding: the codes used (fitted to the view, or ``first``).
         fitted: whether ``encoding`` was fitted to the view.
-        second: a second model and its encoder's codes of the same view (None: no second opinion).
     """
 
     model: Any
     first: Any
     encoding: Any
     fitted: bool
-    second: tuple[Any, Any] | None = None
 
 
-def encode_view(loaded: LoadedModel, obj: ObjectData, view: int) -> Any:
-    """The encoder's codes of one view of a dataset object."""
+def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: int = 0) -> Prediction:
+    """Encode one view of a dataset object, then (``fit_steps`` > 0) fit the codes to it for that many steps of
+    test-time inversion, as ``affnerf predict`` does."""
     model = loaded.model
     images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
-    return model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
-
-
-def predict_object(
-    loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: int = 0, second: LoadedModel | None = None
-) -> Prediction:
-    """Encode one view of a dataset object, then (``fit_steps`` > 0) fit the codes to it for that many steps of
-    test-time inversion, as ``affnerf predict`` does; ``second`` (a second model) encodes the same view too."""
-    model, first = loaded.model, encode_view(loaded, obj, view)
-    opinion = None if second is None else (second.model, encode_view(second, obj, view))
+    first = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
     if fit_steps <= 0:
-        return Prediction(model, first, first, False, opinion)
+        return Prediction(model, first, first, False)
     target = dataset_crop_target(obj, view, model.config.encoder_resolution)
     config = InversionConfig(steps=fit_steps, seed=view)
-    fitted = invert(model, first, target, np.asarray(loaded.background), config).codes
-    return Prediction(model, first, fitted, True, opinion)
+    return Prediction(model, first, invert(model, first, target, np.asarray(loaded.background), config).codes, True)
 
 
 def predicted_object(
@@ -180,17 +164,12 @@ def predicted_object(
 ) -> GraspObject:
     """The predicted affordance model as a graspable mesh (canonical frame). For fitted codes and
     ``agreement_distance`` > 0, its faces carry ``confirmed`` (:func:`affnerf.predict.agreement.confirmed` against
-    the encoder's codes' own mesh and, with a second opinion, that model's mesh at its own level too), read as
-    the object's ``face_agrees``."""
+    the encoder's codes' own mesh), read as the object's ``face_agrees``."""
     model, encoding = prediction.model, prediction.encoding
     mesh = model_mesh(model, encoding, resolution, level, model.occupancy(encoding))
     if prediction.fitted and agreement_distance > 0:
         first = prediction.first
-        others = [model_mesh(model, first, resolution, level, model.occupancy(first))]
-        if prediction.second is not None:
-            other_model, codes = prediction.second
-            others.append(model_mesh(other_model, codes, resolution, None, other_model.occupancy(codes)))
-        mesh = confirmed(mesh, others, agreement_distance)
+        mesh = confirmed(mesh, model_mesh(model, first, resolution, level, model.occupancy(first)), agreement_distance)
     return GraspObject.from_mesh(mesh, f"{name} (predicted)")
 
 
@@ -198,14 +177,11 @@ def with_predicted_labels(prediction: Prediction, mesh: GraspObject, agreement: 
     """``mesh`` (the true one, canonical frame) with its faces labelled by the predicted field at their centres
     (:func:`affnerf.predict.mesh.label_faces`): the predicted affordance on the true geometry. For fitted codes
     and ``agreement``, ``face_agrees`` marks the faces where the encoder's own field gives the same label (the
-    planner tries those first, as on the predicted mesh), and so does the second opinion's field when there is one."""
+    planner tries those first, as on the predicted mesh)."""
     labels = label_faces(mesh.vertices, mesh.faces, prediction.model.point_fields(prediction.encoding)[1])
     agrees = None
     if prediction.fitted and agreement:
         agrees = label_faces(mesh.vertices, mesh.faces, prediction.model.point_fields(prediction.first)[1]) == labels
-        if prediction.second is not None:
-            other_model, codes = prediction.second
-            agrees &= label_faces(mesh.vertices, mesh.faces, other_model.point_fields(codes)[1]) == labels
     return GraspObject(mesh.vertices, mesh.faces, labels, f"{mesh.name} (predicted labels)", agrees)
 
 
@@ -296,23 +272,17 @@ def planning_meshes(
 
 
 def evaluate_object(
-    loaded: LoadedModel,
-    obj: ObjectData,
-    config: GraspEvalConfig,
-    picture: Path | None = None,
-    second: LoadedModel | None = None,
+    loaded: LoadedModel, obj: ObjectData, config: GraspEvalConfig, picture: Path | None = None
 ) -> dict[str, Any]:
     """Every condition on one object (:data:`CONDITIONS`): per condition, epsilon, on-task-part flags and
     lift results per grasp, all on the true mesh at metric size; and the size and mass used. With ``picture``,
-    also a PNG there of each condition's planning mesh with its best grasps. ``second``: the loaded
-    ``config.second_opinion``."""
+    also a PNG there of each condition's planning mesh with its best grasps."""
     canonical = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
     size = object_size(obj, canonical, config)
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
-    prediction = predict_object(loaded, obj, view, config.fit_steps, second)
-    meshes = planning_meshes(canonical, prediction, size.factor, config)
+    meshes = planning_meshes(canonical, predict_object(loaded, obj, view, config.fit_steps), size.factor, config)
     gt = meshes["true_whole"]
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(
@@ -346,21 +316,17 @@ def evaluate_object(
 
 
 @functools.cache
-def _worker_inputs(
-    run: Path, data: Path, device: str, second: Path | None = None
-) -> tuple[LoadedModel, Dataset, LoadedModel | None]:
-    """The model, dataset and second opinion (None without one) of a worker process, loaded once per process."""
-    opinion = None if second is None else load_model(second, pick_device(device))
-    return load_model(run, pick_device(device)), Dataset.open(data), opinion
+def _worker_inputs(run: Path, data: Path, device: str) -> tuple[LoadedModel, Dataset]:
+    """The model and dataset of a worker process, loaded once per process."""
+    return load_model(run, pick_device(device)), Dataset.open(data)
 
 
 def _evaluate_job(config: GraspEvalConfig, job: tuple[IndexEntry, Path | None], done: Callable[[], None]) -> dict:
     """One object of :func:`run_grasp_eval` in a worker process (:func:`affnerf.data.pool.run_jobs`): ``job`` is
     its index entry and the path of its category's picture (None: no picture)."""
     entry, picture = job
-    second = None if config.second_opinion is None else Path(config.second_opinion)
-    loaded, ds, opinion = _worker_inputs(Path(config.run), Path(config.data), config.device, second)
-    result = evaluate_object(loaded, ds.load_object(entry), config, picture, opinion)
+    loaded, ds = _worker_inputs(Path(config.run), Path(config.data), config.device)
+    result = evaluate_object(loaded, ds.load_object(entry), config, picture)
     done()
     return result
 

@@ -9,7 +9,6 @@ the confirmed faces of a task part first (:func:`affnerf.grasp.planner.plan_gras
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -54,25 +53,19 @@ def agreeing_faces(
     return (gap <= distance) & (np.asarray(other_labels)[nearest] == np.asarray(labels))
 
 
-def confirmed(
-    mesh: LabelledMesh, other: LabelledMesh | Sequence[LabelledMesh], distance: float = AGREEMENT_DISTANCE
-) -> LabelledMesh:
+def confirmed(mesh: LabelledMesh, other: LabelledMesh, distance: float = AGREEMENT_DISTANCE) -> LabelledMesh:
     """``mesh`` with the face property ``confirmed`` (F,) uint8: 1 where ``other``, a second prediction of the
-    object in the same frame, confirms the face's ``affordance`` label (:func:`agreeing_faces`); given several
-    other predictions, where every one of them does. All meshes need the face property ``affordance``; a mesh
-    without faces is returned as it is."""
+    object in the same frame, confirms the face's ``affordance`` label (:func:`agreeing_faces`). Both meshes need
+    the face property ``affordance``; a mesh without faces is returned as it is."""
     if not len(mesh.faces):
         return mesh
-    others = [other] if isinstance(other, LabelledMesh) else list(other)
-    agrees = np.ones(len(mesh.faces), bool)
-    for o in others:
-        agrees &= agreeing_faces(
-            mesh.vertices,
-            mesh.faces,
-            mesh.face_props["affordance"],
-            o.vertices,
-            o.faces,
-            o.face_props["affordance"],
-            distance,
-        )
+    agrees = agreeing_faces(
+        mesh.vertices,
+        mesh.faces,
+        mesh.face_props["affordance"],
+        other.vertices,
+        other.faces,
+        other.face_props["affordance"],
+        distance,
+    )
     return replace(mesh, face_props={**mesh.face_props, "confirmed": agrees.astype(np.uint8)})
