@@ -38,9 +38,10 @@ TITLES = {
     "part-margin": "Part margin of restricted grasps",
     "predicted-clearance": "Width clearance on predicted models",
     "min-confidence": "Least label confidence of restricted grasps on predicted models",
+    "sight-cone": "Closing along the line of sight on predicted models",
 }
 #: Unit of each setting's values in the tables.
-UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": ""}
+UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": "", "sight-cone": " (°)"}
 
 
 def label(value: str) -> str:

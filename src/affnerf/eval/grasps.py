@@ -97,6 +97,9 @@ class GraspEvalConfig:
             prediction confirms); then on the whole part (:class:`~affnerf.grasp.planner.PlanConfig`; 0 = off, the
             default: on validation objects 0.7-0.9 raised the on-part share by 0-2 points and cost lift-and-disturb
             8-13 points, benchmarks/results/grasp_confidence.md).
+        sight_cone: on the predicted models fitted to their view, grasps are first sought with their closing axis
+            within this angle (degrees) of the line of sight from the camera the fit found
+            (:class:`~affnerf.grasp.planner.PlanConfig` ``sight_origin``); 0 = off.
         rank: what orders every condition's grasps (:class:`~affnerf.grasp.planner.PlanConfig`): ``epsilon``
             (Ferrari-Canny) or ``hold`` (the weight carried while the object turns about the closing axis).
         workers: objects evaluated at once, each in a process of its own on one core and one thread
@@ -125,6 +128,7 @@ class GraspEvalConfig:
     agreement_distance: float = AGREEMENT_DISTANCE
     predicted_clearance: float = PREDICTED_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
+    sight_cone: float = 0.0
     rank: Literal["epsilon", "hold"] = RANK
     workers: int = 2
 
@@ -138,12 +142,14 @@ class Prediction:
         first: the encoder's codes of the view.
         encoding: the codes used (fitted to the view, or ``first``).
         fitted: whether ``encoding`` was fitted to the view.
+        camera: (4, 4) camera-to-canonical pose of the view the fit found (None when not fitted).
     """
 
     model: Any
     first: Any
     encoding: Any
     fitted: bool
+    camera: np.ndarray | None = None
 
 
 def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: int = 0) -> Prediction:
@@ -156,7 +162,8 @@ def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: i
         return Prediction(model, first, first, False)
     target = dataset_crop_target(obj, view, model.config.encoder_resolution)
     config = InversionConfig(steps=fit_steps, seed=view)
-    return Prediction(model, first, invert(model, first, target, np.asarray(loaded.background), config).codes, True)
+    result = invert(model, first, target, np.asarray(loaded.background), config)
+    return Prediction(model, first, result.codes, True, result.camera_to_world())
 
 
 def predicted_object(
@@ -249,11 +256,21 @@ def _condition(
     }
 
 
-def condition_settings(plan: PlanConfig, mesh: str, affordance: str, config: GraspEvalConfig) -> PlanConfig:
+def condition_settings(
+    plan: PlanConfig, mesh: str, affordance: str, config: GraspEvalConfig, sight_origin: np.ndarray | None = None
+) -> PlanConfig:
     """The planner's settings for one condition: ``plan`` restricted to ``affordance`` (``none`` = the whole
-    surface), with ``config.predicted_clearance`` as the width clearance when ``mesh`` is ``predicted``."""
+    surface), with ``config.predicted_clearance`` as the width clearance when ``mesh`` is ``predicted``, and
+    there, with ``config.sight_cone`` > 0 and the fitted camera's centre ``sight_origin`` (3,) (metric object
+    frame), closing axes along the line of sight first."""
     settings = replace(plan, affordance=affordance)
-    return replace(settings, width_clearance=config.predicted_clearance) if mesh == "predicted" else settings
+    if mesh != "predicted":
+        return settings
+    settings = replace(settings, width_clearance=config.predicted_clearance)
+    if sight_origin is None or config.sight_cone <= 0:
+        return settings
+    origin = tuple(float(v) for v in sight_origin)
+    return replace(settings, sight_origin=origin, sight_cone=config.sight_cone)
 
 
 def planning_meshes(
@@ -282,7 +299,9 @@ def evaluate_object(
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
-    meshes = planning_meshes(canonical, predict_object(loaded, obj, view, config.fit_steps), size.factor, config)
+    prediction = predict_object(loaded, obj, view, config.fit_steps)
+    meshes = planning_meshes(canonical, prediction, size.factor, config)
+    sight_origin = None if prediction.camera is None else prediction.camera[:3, 3] * size.factor
     gt = meshes["true_whole"]
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(
@@ -305,7 +324,7 @@ def evaluate_object(
     for cond, mesh in meshes.items():
         whole = cond == whole_of(cond)
         planning = GraspObject(mesh.vertices, mesh.faces, None, mesh.name) if whole else mesh
-        settings = condition_settings(plan, mesh_of(cond), "none" if whole else task, config)
+        settings = condition_settings(plan, mesh_of(cond), "none" if whole else task, config, sight_origin)
         grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
         panels[cond] = (mesh, grasps)
     if picture is not None:
