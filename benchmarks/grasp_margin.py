@@ -1,8 +1,9 @@
 """Choose a planner setting of ``affnerf eval grasp`` on validation objects (issue 13): the part margin
 (``--part-margin``, ``PlanConfig.part_margin``), the width clearance on predicted models (``--predicted-clearance``,
 ``PlanConfig.width_clearance``) or the least label confidence of restricted grasps on predicted models
-(``--min-confidence``, ``PlanConfig.min_confidence``). (A fourth setting, ``--second-opinion``, measured in
-benchmarks/results/grasp_second_opinion.md, was removed with the option: see that file's provenance.)
+(``--min-confidence``, ``PlanConfig.min_confidence``). (Two more settings, ``--second-opinion`` and ``--sight-cone``,
+measured in benchmarks/results/grasp_second_opinion.md and grasp_sight.md, were removed with their options: see
+those files' provenance.)
 
 Runs ``affnerf eval grasp`` on the validation split (no pictures; no physics unless ``--lift``) once per value, two
 runs at a time on one thread each, and tabulates, per value, the share of task-part grasps with both contacts on the
@@ -38,10 +39,9 @@ TITLES = {
     "part-margin": "Part margin of restricted grasps",
     "predicted-clearance": "Width clearance on predicted models",
     "min-confidence": "Least label confidence of restricted grasps on predicted models",
-    "sight-cone": "Closing along the line of sight on predicted models",
 }
 #: Unit of each setting's values in the tables.
-UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": "", "sight-cone": " (°)"}
+UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": ""}
 
 
 def label(value: str) -> str:

@@ -325,28 +325,3 @@ def test_ranking_by_hold_orders_by_the_weight_carried_through_the_turn(screwdriv
     # the same candidates, ranked another way: the best hold is found first, and the epsilon ranking's is no better
     assert by_hold[0].hold >= max(g.hold for g in by_epsilon)
     assert by_hold[0].to_json()["hold"] == pytest.approx(by_hold[0].hold, abs=1e-6)
-
-
-def test_with_the_photos_camera_grasps_close_along_the_line_of_sight(screwdriver):
-    import math
-
-    from affnerf.grasp.planner import along_sight
-
-    handle = PlanConfig(affordance="grasp", num=8, refine=RefineConfig(steps=0), part_margin=0.0)
-    for origin in ((0.0, -0.8, 0.0), (0.0, 0.0, 0.8)):  # a camera in front of the handle, and one above it
-        grasps = plan_grasps(screwdriver, replace(handle, sight_origin=origin, sight_cone=25.0))
-        assert grasps and all(g.affordance == ["grasp", "grasp"] for g in grasps)
-        poses = np.stack([g.pose for g in grasps])
-        assert along_sight(poses[:, :3, 3], poses[:, :3, 0], np.array(origin), math.cos(math.radians(25.0))).all()
-    # without a camera the axes point every way round the handle's axis
-    free = np.stack([g.pose[:3, 0] for g in plan_grasps(screwdriver, replace(handle, num=32))])
-    assert not along_sight(np.zeros((len(free), 3)), free, np.array([0.0, -0.8, 0.0]), math.cos(0.44)).all()
-
-
-def test_a_line_of_sight_no_grasp_can_follow_falls_back_to_any_axis():
-    # a flat plate seen edge-on: the line of sight runs along the plate, across which nothing closes
-    plate = trimesh.creation.box((0.12, 0.12, 0.01))  # only its 1 cm fits the 8 cm opening
-    obj = GraspObject(plate.vertices, plate.faces, None, "plate")
-    config = PlanConfig(num=4, refine=RefineConfig(steps=0), sight_origin=(0.8, 0.0, 0.0), sight_cone=10.0)
-    grasps = plan_grasps(obj, config)
-    assert grasps and all(abs(g.pose[2, 0]) > 0.9 for g in grasps)  # closed across the plate's 1 cm, as without

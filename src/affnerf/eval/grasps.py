@@ -97,9 +97,6 @@ class GraspEvalConfig:
             prediction confirms); then on the whole part (:class:`~affnerf.grasp.planner.PlanConfig`; 0 = off, the
             default: on validation objects 0.7-0.9 raised the on-part share by 0-2 points and cost lift-and-disturb
             8-13 points, benchmarks/results/grasp_confidence.md).
-        sight_cone: on the predicted models fitted to their view, grasps are first sought with their closing axis
-            within this angle (degrees) of the line of sight from the camera the fit found
-            (:class:`~affnerf.grasp.planner.PlanConfig` ``sight_origin``); 0 = off.
         rank: what orders every condition's grasps (:class:`~affnerf.grasp.planner.PlanConfig`): ``epsilon``
             (Ferrari-Canny) or ``hold`` (the weight carried while the object turns about the closing axis).
         workers: objects evaluated at once, each in a process of its own on one core and one thread
@@ -128,7 +125,6 @@ class GraspEvalConfig:
     agreement_distance: float = AGREEMENT_DISTANCE
     predicted_clearance: float = PREDICTED_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
-    sight_cone: float = 0.0
     rank: Literal["epsilon", "hold"] = RANK
     workers: int = 2
 
@@ -142,14 +138,12 @@ class Prediction:
         first: the encoder's codes of the view.
         encoding: the codes used (fitted to the view, or ``first``).
         fitted: whether ``encoding`` was fitted to the view.
-        camera: (4, 4) camera-to-canonical pose of the view the fit found (None when not fitted).
     """
 
     model: Any
     first: Any
     encoding: Any
     fitted: bool
-    camera: np.ndarray | None = None
 
 
 def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: int = 0) -> Prediction:
@@ -162,8 +156,7 @@ def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: i
         return Prediction(model, first, first, False)
     target = dataset_crop_target(obj, view, model.config.encoder_resolution)
     config = InversionConfig(steps=fit_steps, seed=view)
-    result = invert(model, first, target, np.asarray(loaded.background), config)
-    return Prediction(model, first, result.codes, True, result.camera_to_world())
+    return Prediction(model, first, invert(model, first, target, np.asarray(loaded.background), config).codes, True)
 
 
 def predicted_object(
@@ -256,21 +249,11 @@ def _condition(
     }
 
 
-def condition_settings(
-    plan: PlanConfig, mesh: str, affordance: str, config: GraspEvalConfig, sight_origin: np.ndarray | None = None
-) -> PlanConfig:
+def condition_settings(plan: PlanConfig, mesh: str, affordance: str, config: GraspEvalConfig) -> PlanConfig:
     """The planner's settings for one condition: ``plan`` restricted to ``affordance`` (``none`` = the whole
-    surface), with ``config.predicted_clearance`` as the width clearance when ``mesh`` is ``predicted``, and
-    there, with ``config.sight_cone`` > 0 and the fitted camera's centre ``sight_origin`` (3,) (metric object
-    frame), closing axes along the line of sight first."""
+    surface), with ``config.predicted_clearance`` as the width clearance when ``mesh`` is ``predicted``."""
     settings = replace(plan, affordance=affordance)
-    if mesh != "predicted":
-        return settings
-    settings = replace(settings, width_clearance=config.predicted_clearance)
-    if sight_origin is None or config.sight_cone <= 0:
-        return settings
-    origin = tuple(float(v) for v in sight_origin)
-    return replace(settings, sight_origin=origin, sight_cone=config.sight_cone)
+    return replace(settings, width_clearance=config.predicted_clearance) if mesh == "predicted" else settings
 
 
 def planning_meshes(
@@ -299,9 +282,7 @@ def evaluate_object(
     view = choose_views(
         len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=config.seed)
     )[0][0]
-    prediction = predict_object(loaded, obj, view, config.fit_steps)
-    meshes = planning_meshes(canonical, prediction, size.factor, config)
-    sight_origin = None if prediction.camera is None else prediction.camera[:3, 3] * size.factor
+    meshes = planning_meshes(canonical, predict_object(loaded, obj, view, config.fit_steps), size.factor, config)
     gt = meshes["true_whole"]
     task, mass = task_affordance(obj.record.category), object_mass(gt.vertices, gt.faces, obj.record.category)
     plan = PlanConfig(
@@ -324,7 +305,7 @@ def evaluate_object(
     for cond, mesh in meshes.items():
         whole = cond == whole_of(cond)
         planning = GraspObject(mesh.vertices, mesh.faces, None, mesh.name) if whole else mesh
-        settings = condition_settings(plan, mesh_of(cond), "none" if whole else task, config, sight_origin)
+        settings = condition_settings(plan, mesh_of(cond), "none" if whole else task, config)
         grasps, result[cond] = _condition(gt, planning, settings, task, mass, config, size.source)
         panels[cond] = (mesh, grasps)
     if picture is not None:

@@ -38,11 +38,6 @@ WIDTH_CLEARANCE = 0.0
 PREDICTED_CLEARANCE = 0.012
 #: Default ``rank`` of the planner's grasps.
 RANK = "epsilon"
-#: Default ``sight_cone``: largest angle, degrees, between a grasp's closing axis and the line of sight from the
-#: photo's camera to the grasp, when the planner knows that camera (``sight_origin``).
-SIGHT_CONE = 30.0
-#: Antipodal samples drawn per candidate pair when the closing axes must follow the line of sight.
-SIGHT_OVERSAMPLING = 3
 
 
 @dataclass(frozen=True)
@@ -75,14 +70,6 @@ class PlanConfig:
         rank: what orders the grasps, best first: ``epsilon`` (Ferrari-Canny, every wrench direction at once) or
             ``hold`` (the least weight the contacts carry at the centroid while the object turns ±90° about the
             closing axis, :func:`~affnerf.grasp.quality.hold_quality`; canonical +z up), ties broken by epsilon.
-        sight_origin: the centre (3,) of the camera of the photo a predicted mesh comes from, in the mesh's frame
-            (metres), or None. A model predicted from one view is sure of where things are across the image and
-            unsure of their depth along it; the jaws of a parallel gripper travel along their closing axis, so
-            a grasp that closes along the line of sight still closes on the true object when its depth is off,
-            and on what the photo shows at that place. With it, grasps are first sought with their closing axis
-            within ``sight_cone`` of the line from this point to the grasp's centre, then anywhere
-            (:func:`plan_grasps`), so it never costs an object its grasps.
-        sight_cone: that largest angle, degrees.
     """
 
     affordance: str = "none"
@@ -98,8 +85,6 @@ class PlanConfig:
     width_clearance: float = WIDTH_CLEARANCE
     min_confidence: float = MIN_CONFIDENCE
     rank: Literal["epsilon", "hold"] = RANK
-    sight_origin: tuple[float, float, float] | None = None
-    sight_cone: float = SIGHT_CONE
 
 
 @dataclass
@@ -183,18 +168,14 @@ def sample_antipodal(
     mu: float,
     gripper: ParallelJawGripper,
     clearance: float = WIDTH_CLEARANCE,
-    sight: tuple[np.ndarray, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Antipodal candidate pairs: a surface point, a ray into the object within half the friction cone, and
-    the surface where it comes out, both on allowed faces and at most :func:`widest_pair` apart; with ``sight``
-    (a camera centre (3,) and an angle's cosine), only pairs whose axis follows the line of sight to their centre
-    that closely (:func:`along_sight`).
+    the surface where it comes out, both on allowed faces and at most :func:`widest_pair` apart.
 
     Returns:
         centres (K, 3), closing axes (K, 3) from the first point to the second, widths (K,).
     """
-    draws = count * 4 * (1 if sight is None else SIGHT_OVERSAMPLING)
-    points, faces = obj.sample_surface(draws, rng, mask)
+    points, faces = obj.sample_surface(count * 4, rng, mask)
     if not len(points):
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
     inward = -obj.face_normals[faces]
@@ -208,25 +189,8 @@ def sample_antipodal(
         ok &= mask[face]
     ray, t = ray[ok], t[ok]
     a, b = points[ray], points[ray] + t[:, None] * dirs[ray]
-    centres, axes = (a + b) / 2.0, dirs[ray]
-    keep = np.arange(len(t)) if sight is None else np.flatnonzero(along_sight(centres, axes, *sight))
-    keep = keep[:count]
-    return centres[keep], axes[keep], t[keep]
-
-
-def along_sight(centres: np.ndarray, axes: np.ndarray, origin: np.ndarray, min_cos: float) -> np.ndarray:
-    """(K,) bool: whether each closing axis (K, 3) lies within the angle of cosine ``min_cos`` of the line from
-    ``origin`` (3,) to its grasp's centre (K, 3), either way along it.
-
-    Example:
-        >>> along_sight(np.array([[0.0, 0, 0], [0, 0, 0]]), np.array([[0.0, 0, 1], [1, 0, 0]]),
-        ...             np.array([0.0, 0, 2]), 0.9).tolist()
-        [True, False]
-    """
-    line = np.asarray(centres, float) - np.asarray(origin, float)
-    line /= np.maximum(np.linalg.norm(line, axis=1, keepdims=True), 1e-12)
-    unit = np.asarray(axes, float) / np.maximum(np.linalg.norm(axes, axis=1, keepdims=True), 1e-12)
-    return np.abs((unit * line).sum(axis=1)) >= min_cos
+    keep = slice(0, count)
+    return ((a + b) / 2.0)[keep], dirs[ray][keep], t[keep]
 
 
 def _approaches(axes: np.ndarray, per_pair: int, rng: np.random.Generator) -> np.ndarray:
@@ -315,28 +279,22 @@ def plan_grasps(
 ) -> list[Grasp]:
     """Plan grasps, best first (at most ``config.num``; fewer when fewer survive the checks). Restricted to a
     part, on the first of :func:`part_masks` where any survive (the part the mesh vouches for, the part shrunk by
-    the margin, the whole part). With ``config.sight_origin``, first with the closing axes along the line of
-    sight, on each of those surfaces in turn, then without."""
+    the margin, the whole part)."""
     part = allowed_faces(obj, config.affordance)
-    masks = [None] if part is None else part_masks(obj, part, config.part_margin, config.min_confidence)
-    sights = [config.sight_origin, None] if config.sight_origin is not None else [None]
-    for origin in sights:
-        settings = replace(config, sight_origin=origin)
-        for mask in masks:
-            grasps = _plan_on(obj, mask, settings, gripper)
-            if grasps:
-                return grasps
+    if part is None:
+        return _plan_on(obj, None, config, gripper)
+    for mask in part_masks(obj, part, config.part_margin, config.min_confidence):
+        grasps = _plan_on(obj, mask, config, gripper)
+        if grasps:
+            return grasps
     return []
 
 
 def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, gripper: ParallelJawGripper) -> list[Grasp]:
     """Grasps with both contacts on ``mask`` faces ((F,) bool; None = anywhere), best first."""
     rng = np.random.default_rng(config.seed)
-    sight = None
-    if config.sight_origin is not None:
-        sight = (np.asarray(config.sight_origin, float), math.cos(math.radians(config.sight_cone)))
     centres, axes, widths = sample_antipodal(
-        obj, config.candidates, rng, mask, config.mu, gripper, config.width_clearance, sight
+        obj, config.candidates, rng, mask, config.mu, gripper, config.width_clearance
     )
     if not len(centres):
         return []
@@ -363,8 +321,6 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     valid &= contacts.width <= gripper.max_opening - config.width_clearance
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
-    if sight is not None:
-        valid &= along_sight(poses[:, :3, 3], poses[:, :3, 0], *sight)
     kept, epsilon, hold = _rank(obj, replace(contacts, valid=valid), poses, config)
     return [
         Grasp(
