@@ -41,6 +41,7 @@ from affnerf.predict.invert import (
 GROUPS = {
     "heads": ("feature", "affordance", "color", "density"),
     "surface": ("color", "density"),
+    "color": ("color",),
     "last": ("trunk_layers.3", "feature", "affordance", "color", "density"),
     "all": ("",),
 }
