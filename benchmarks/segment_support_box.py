@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
+from affnerf.data.crop import object_bbox as bbox
 from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
 from affnerf.predict.segment import mask_iou, resolve_segmenter
@@ -30,12 +31,6 @@ sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites  # noqa: E402
 
 THRESHOLDS = (0.05, 0.1, 0.2, 0.3)
-
-
-def bbox(mask: np.ndarray) -> tuple[int, int, int, int] | None:
-    """(x0, y0, x1, y1) of an (H, W) bool mask, or None when it is empty."""
-    ys, xs = np.nonzero(mask)
-    return None if not len(xs) else (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
 
 
 def box_iou(a, b) -> float:
