@@ -44,30 +44,16 @@ TITLES = {
 UNITS = {"part-margin": " (m)", "predicted-clearance": " (m)", "min-confidence": ""}
 
 
-def label(value: str) -> str:
-    """A setting's value as its table row names it: a number in its shortest form (anything else by its file
-    name)."""
-    try:
-        return f"{float(value):g}"
-    except ValueError:
-        return Path(value).name
-
-
-def setting_flags(setting: str, value: str) -> list[str]:
-    """The ``eval grasp`` flags of one value."""
-    return [f"--{setting}", value]
-
-
-def run_one(args: argparse.Namespace, margin: str) -> tuple[str, Path, float | None]:
+def run_one(args: argparse.Namespace, margin: float) -> tuple[float, Path, float | None]:
     """One ``eval grasp`` with the setting at ``margin`` (skipped when its folder holds results); returns (the
     value, its output folder, seconds or None when skipped)."""
-    out = Path(args.out) / f"{args.setting}_{label(margin)}_seed{args.seed}"
+    out = Path(args.out) / f"{args.setting}_{margin:g}_seed{args.seed}"
     if not (out / "grasp_metrics.json").is_file():
         cmd = [str(Path(sys.executable).parent / "affnerf")]
         cmd += ["eval", "grasp", "--run", args.run, "--data", args.data, "--out", str(out), "--split", args.split]
         cmd += ["--max-objects", str(args.max_objects), "--no-pictures", "--device", "cpu"]
         cmd += [] if args.lift else ["--no-lift"]
-        cmd += setting_flags(args.setting, margin) + ["--seed", str(args.seed)]
+        cmd += [f"--{args.setting}", str(margin), "--seed", str(args.seed)]
         start = time.perf_counter()
         env = dict(os.environ, OMP_NUM_THREADS="1")
         subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
@@ -75,10 +61,10 @@ def run_one(args: argparse.Namespace, margin: str) -> tuple[str, Path, float | N
     return margin, out, None
 
 
-def summarise(margin: str, folder: Path, seconds: float | None) -> dict:
+def summarise(margin: float, folder: Path, seconds: float | None) -> dict:
     """The figures of one margin's run from its ``grasp_metrics.json``."""
     metrics = json.loads((folder / "grasp_metrics.json").read_text())
-    row: dict = {"margin": label(margin), "seconds": None if seconds is None else round(seconds, 1)}
+    row: dict = {"margin": margin, "seconds": None if seconds is None else round(seconds, 1)}
     for cond in CONDITIONS:
         per_cat = {c: v[cond] for c, v in metrics["categories"].items()}
         row[cond] = {
@@ -115,7 +101,7 @@ def markdown(rows: list[dict], provenance: str, setting: str = "part-margin") ->
             shares = " | ".join(_pct(c["on_part_share"][k]) for k in cats)
             same = sum(c["on_part_share"][k] for k in common) / max(len(common), 1)
             lines += [
-                f"| {r['margin']} | {shares} | {_pct(c['mean_on_part_share'])} | {_pct(same)} | "
+                f"| {r['margin']:g} | {shares} | {_pct(c['mean_on_part_share'])} | {_pct(same)} | "
                 f"{c['no_grasp_objects']}/{c['objects']} | {c['mean_epsilon_ratio']:.2f} |"
             ]
         lines += ["", f"Same categories: {', '.join(common)} (every value has grasps there).", ""]
@@ -133,7 +119,7 @@ def physics_markdown(rows: list[dict], setting: str) -> list[str]:
     lines += ["| --- " * (len(conds) + 1) + "|"]
     for r in rows:
         cells = [f"{_pct(r['physics'][c]['lift_success'])} / {_pct(r['physics'][c]['disturb_success'])}" for c in conds]
-        lines += [f"| {r['margin']} | " + " | ".join(cells) + " |"]
+        lines += [f"| {r['margin']:g} | " + " | ".join(cells) + " |"]
     return lines + [""]
 
 
@@ -144,7 +130,7 @@ def main() -> None:
     parser.add_argument("--run", default="src/affnerf/weights/affnerf-small.pt")
     parser.add_argument("--split", default="val")
     parser.add_argument("--setting", choices=sorted(TITLES), default="part-margin")
-    parser.add_argument("--values", "--margins", nargs="+", default=["0", "0.005", "0.01", "0.015", "0.02"])
+    parser.add_argument("--values", "--margins", type=float, nargs="+", default=[0.0, 0.005, 0.01, 0.015, 0.02])
     parser.add_argument("--seed", type=int, default=0, help="eval grasp's seed (input view and planner)")
     parser.add_argument("--lift", action="store_true", help="also run the physics lift and disturbance")
     parser.add_argument("--max-objects", type=int, default=5)

@@ -42,8 +42,6 @@ GROUPS = {
     "heads": ("feature", "affordance", "color", "density"),
     "surface": ("color", "density"),
     "color": ("color",),
-    "last": ("trunk_layers.3", "feature", "affordance", "color", "density"),
-    "all": ("",),
 }
 
 
@@ -55,8 +53,7 @@ def tuned_parameters(field: torch.nn.Module, group: str) -> list[torch.nn.Parame
 def tune_weights(model, codes: Codes, target, camera, background, args) -> None:
     """Adam on the chosen weights of ``model`` (in place) against the crop, codes and camera held."""
     device = next(model.parameters()).device
-    field = model.fine if getattr(model, "fine", None) is not None else model.coarse
-    params = tuned_parameters(field, args.tune)
+    params = tuned_parameters(model.renderer.fine_field(), args.tune)
     start = [p.detach().clone() for p in params]
     scales = [float(p.pow(2).mean().sqrt().clamp_min(1e-6)) for p in start]
     pixels, rgb, mask, k = target_tensors(target, args.resolution, device)
