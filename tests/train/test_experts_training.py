@@ -43,3 +43,24 @@ def test_experts_must_match_the_training_families(tiny_train_config):
     config = _with_experts(tiny_train_config(), experts=3)
     with pytest.raises(AffnerfError, match=r"dataset\.json: --model\.experts 3 .* has 2 \(bottle, screwdriver\)"):
         train(config)
+
+
+def test_an_expert_model_started_from_a_plain_run_computes_what_the_run_did(tiny_train_config, train_dataset):
+    from affnerf.data.dataset import Dataset
+    from affnerf.model.registry import build_model
+    from affnerf.train.state import initial_weights
+
+    config = tiny_train_config(steps=10, checkpoint_every=10)
+    train(config)
+    classes = len(Dataset.open(train_dataset).affordance_classes)
+    plain = build_model(config.model, classes)
+    experts = build_model(replace(config.model, experts=2), classes)
+    initial_weights(config.out, plain, classes)
+    initial_weights(config.out, experts, classes)
+    images = torch.rand(2, 1, 3, 32, 32)
+    cams = torch.zeros(2, 1, 4), torch.eye(4).expand(2, 1, 4, 4)
+    points, obj = torch.rand(50, 3) * 0.3 - 0.15, torch.arange(2).repeat_interleave(25)
+    a = plain.point_geometry(plain.encode_views(images, *cams), obj, points)[-1]
+    b = experts.point_geometry(experts.encode_views(images, *cams), obj, points)[-1]
+    torch.testing.assert_close(a.logits, b.logits)
+    torch.testing.assert_close(a.density, b.density)
