@@ -100,8 +100,8 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
     concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
     pixel-labelling head the checkpoint lacks, ``router.`` when ``config`` asks for weight experts and the
-    checkpoint's field has one set (:func:`expert_weights`). (Fields that do not change the weights, such as the encoders' crop
-    side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
+    checkpoint's field has one set (:func:`expert_weights`). (Fields that do not change the weights, such as the
+    encoders' crop side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
 
     Every start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), the
     labelling head only adds a training loss, and experts that are copies of one layer compute it under any
