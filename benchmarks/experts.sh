@@ -5,6 +5,7 @@
 # as long as the steps it takes in LIMIT minutes (a step of the experts run costs about 12 % more); then both
 # calibrated and scored on val40.
 #   DATA=... benchmarks/experts.sh      (LIMIT minutes; STEPS_PLAIN, STEPS_EXPERTS: the schedules' lengths)
+# The option was removed after this measurement: run it in a checkout of commit 1bf62e4.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"

@@ -8,7 +8,6 @@ import torch
 
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.config import ModelConfig
-from affnerf.model.experts import Router
 from affnerf.model.field import ObjectCodes, per_object
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.model.resnet import CodeEncoder
@@ -69,11 +68,6 @@ class AffNeRF(ConditionedNeRF):
             self.planes = PlaneGenerator(config.code_dim, config.plane_channels, config.plane_resolution)
             trunk_dim = 3 * config.plane_channels + config.code_dim
         self.renderer = FieldRenderer(config, num_classes, trunk_dim, config.code_dim)
-        self.router: Router | None = None
-        if config.experts > 1:
-            if config.conditioning != "concat":
-                raise ValueError(f"experts need concat conditioning, not {config.conditioning}")
-            self.router = Router(config.code_dim, config.experts)
         self._planes_memo: tuple[torch.Tensor, tuple[int, int, bool], torch.Tensor] | None = None
 
     def encode(self, images: torch.Tensor) -> Codes:
@@ -105,24 +99,14 @@ class AffNeRF(ConditionedNeRF):
         return LabelledCodes(shape, appearance, codes.view_logits.reshape(b, v, *codes.view_logits.shape[1:]))
 
     def auxiliary_losses(
-        self,
-        encoding: Codes,
-        input_depth: torch.Tensor | None = None,
-        input_labels: torch.Tensor | None = None,
-        object_families: torch.Tensor | None = None,
+        self, encoding: Codes, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
     ) -> dict[str, torch.Tensor]:
         """``loss/view_affordance``: ``view_affordance_weight`` x the cross-entropy of the shape encoder's pixel
-        labels (:func:`view_label_loss`) against ``input_labels`` (without the head or the labels: none);
-        ``loss/router``: ``router_weight`` x the cross-entropy of the router's scores against the (B,)
-        ``object_families`` (without experts or families: none)."""
-        losses = {}
-        if isinstance(encoding, LabelledCodes) and input_labels is not None and input_labels.numel():
-            loss = view_label_loss(encoding.view_logits, input_labels)
-            losses["loss/view_affordance"] = self.config.view_affordance_weight * loss
-        if self.router is not None and object_families is not None:
-            ce = torch.nn.functional.cross_entropy(self.router.logits(encoding.shape), object_families)
-            losses["loss/router"] = self.config.router_weight * ce
-        return losses
+        labels (:func:`view_label_loss`) against ``input_labels`` (empty without the head or the labels)."""
+        if not isinstance(encoding, LabelledCodes) or input_labels is None or not input_labels.numel():
+            return {}
+        loss = view_label_loss(encoding.view_logits, input_labels)
+        return {"loss/view_affordance": self.config.view_affordance_weight * loss}
 
     def condition(self, encoding: Codes, ray_object: torch.Tensor) -> Condition:
         """Each point takes its object's shape code (trunk) and appearance code (colour head).
@@ -131,15 +115,13 @@ class AffNeRF(ConditionedNeRF):
         many points into few rows in an order that varies between runs on a multi-core CPU, and a resumed run must
         end with the same weights as an uninterrupted one. They stay factored (:class:`ObjectCodes`): the field
         multiplies each object's code with its weights once, not once per point. With ``triplane`` conditioning
-        the trunk takes each point's reads of its object's planes beside its shape code, per point. With weight
-        experts the shape codes carry each object's mixture of them (the router's, once per encoding).
+        the trunk takes each point's reads of its object's planes beside its shape code, per point.
         """
         planes = None if self.planes is None else self.decode_planes(encoding.shape)
-        mix = None if self.router is None else self.router(encoding.shape)
 
         def cond(points: torch.Tensor, rays: torch.Tensor) -> tuple[ObjectCodes | torch.Tensor, ObjectCodes]:
             pick = torch.nn.functional.one_hot(ray_object[rays], encoding.shape.shape[0]).to(encoding.shape.dtype)
-            shape, appearance = ObjectCodes(encoding.shape, pick, mix), ObjectCodes(encoding.appearance, pick)
+            shape, appearance = ObjectCodes(encoding.shape, pick), ObjectCodes(encoding.appearance, pick)
             if planes is None:
                 return shape, appearance
             half = self.config.scene_half_extent

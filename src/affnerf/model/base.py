@@ -51,11 +51,7 @@ class ConditionedNeRF(nn.Module, ABC):
         """
 
     def auxiliary_losses(
-        self,
-        encoding: Any,
-        input_depth: torch.Tensor | None = None,
-        input_labels: torch.Tensor | None = None,
-        object_families: torch.Tensor | None = None,
+        self, encoding: Any, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
     ) -> dict[str, torch.Tensor]:
         """Training losses the model adds to the rendering loss, by log name (each 0-d; none by default).
 
@@ -63,7 +59,6 @@ class ConditionedNeRF(nn.Module, ABC):
             encoding: what :meth:`encode_views` returned for the step's input views.
             input_depth: (B, V, S, S) true z-depth of the input crops (m, 0 = no surface), when the data has it.
             input_labels: (B, V, S, S) true affordance ids of the input crops' pixels, when the data has them.
-            object_families: (B,) each object's family, its index among the training split's sorted families.
         """
         return {}
 

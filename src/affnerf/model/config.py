@@ -89,13 +89,6 @@ class ModelConfig:
             deviation this times the spread (standard deviation) of that code dimension over the step's objects
             (0 = none, the paper). Beyond the paper: the decoder learns to give a plausible object for codes near
             the training objects' ones, as an encoder's code for a new object is (a denoising regulariser).
-        experts: AFF-NeRF with ``concat`` conditioning only, beyond the paper: when > 1, every trunk layer of each
-            field holds this many weight sets, and each object's layers are their mixture by weights a router
-            computes from its shape code (:mod:`affnerf.model.experts`; CondConv): E times the trunk's
-            parameters at about one trunk's cost a point. It must equal the number of families in the training
-            split: the router is trained to pick the object's family (``router_weight``). 1: one set (the paper).
-        router_weight: with ``experts`` > 1, the weight of the router's cross-entropy against each training
-            object's family (``loss/router``; families in sorted order).
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -128,8 +121,6 @@ class ModelConfig:
     plane_channels: int = 16
     encoders: Literal["two", "one"] = "two"
     code_noise: float = 0.0
-    experts: int = 1
-    router_weight: float = 0.1
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint
@@ -149,5 +140,4 @@ NON_ARCHITECTURE_FIELDS = (
     "occupancy_density",
     "projection_camera",
     "code_noise",
-    "router_weight",
 )

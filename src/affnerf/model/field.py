@@ -16,7 +16,6 @@ import torch
 from torch import nn
 
 from affnerf.model.encoding import encoding_dim, positional_encoding
-from affnerf.model.experts import ExpertLinear, group_order, grouped_linear
 
 
 @dataclass(frozen=True)
@@ -32,12 +31,10 @@ class ObjectCodes:
         table: (B, D) one code per object.
         pick: (N, B) one-hot rows: the object of each point (a product rather than indexing keeps the gradient's
             summation order fixed, see :meth:`affnerf.model.affnerf.AffNeRF.condition`).
-        mix: (B, E) each object's mixture of a field's weight experts (:mod:`affnerf.model.experts`), or None.
     """
 
     table: torch.Tensor
     pick: torch.Tensor
-    mix: torch.Tensor | None = None
 
     def __len__(self) -> int:
         return self.pick.shape[0]
@@ -160,8 +157,6 @@ class ConditionalField(nn.Module):
         sdf: the density head gives a signed distance d (metres, negative inside; starting at :data:`SDF_START`
             everywhere) and the density is :func:`laplace_density` of it with a learnt scale beta (VolSDF); False:
             the density is a softplus of the head (the paper).
-        experts: weight sets of each trunk layer (:class:`~affnerf.model.experts.ExpertLinear`), mixed per object
-            by the :class:`ObjectCodes` ``mix`` the field is given; 1: plain layers (the paper).
     """
 
     def __init__(
@@ -177,21 +172,17 @@ class ConditionalField(nn.Module):
         color_code_dim: int | None = None,
         film: bool = False,
         sdf: bool = False,
-        experts: int = 1,
     ) -> None:
         super().__init__()
-        if experts > 1 and film:
-            raise ValueError("weight experts do not combine with FiLM conditioning")
         color_code_dim = code_dim if color_code_dim is None else color_code_dim
         self.pe_xyz, self.pe_dir = pe_xyz, pe_dir
         in_dim = encoding_dim(3, pe_xyz) + code_dim
         self.skip = depth // 2
-        layers: list[nn.Module] = []
+        layers = []
         for i in range(depth):
             d_in = in_dim if i == 0 else width + (in_dim if i == self.skip else 0)
-            layers.append(nn.Linear(d_in, width) if experts == 1 else ExpertLinear(d_in, width, experts))
+            layers.append(nn.Linear(d_in, width))
         self.trunk_layers = nn.ModuleList(layers)
-        self.experts = experts
         self.width = width
         self.film: nn.Linear | None = None
         if film:
@@ -217,8 +208,6 @@ class ConditionalField(nn.Module):
     def trunk(self, points: torch.Tensor, shape_code: Code) -> torch.Tensor:
         """(N, width) trunk features of (N, 3) points under (N, code_dim) shape codes (a tensor or factored)."""
         pe = positional_encoding(points, self.pe_xyz)
-        if self.experts > 1:
-            return self._expert_trunk(pe, shape_code)
         mods = None
         if self.film is not None:  # (N, depth, 2, width): each layer's gamma and beta
             film = self.film
@@ -236,32 +225,6 @@ class ConditionalField(nn.Module):
                 h = h * (1.0 + mods[:, i, 0]) + mods[:, i, 1]
             h = torch.relu(h)
         return h
-
-    def _expert_trunk(self, pe: torch.Tensor, codes: Code) -> torch.Tensor:
-        """(N, width) trunk features of (N, P) encoded points whose layers are weight experts mixed per object.
-
-        Each object's weights are mixed once (``codes.mix``); the points are grouped by object for the products
-        (:func:`~affnerf.model.experts.grouped_linear`) and put back in their order at the end.
-        """
-        if not isinstance(codes, ObjectCodes) or codes.mix is None:
-            raise ValueError("a field with weight experts needs factored codes with a mixture (ObjectCodes.mix)")
-        order, counts = group_order(codes.pick.argmax(dim=1), codes.table.shape[0])
-        pick = codes.pick if order is None else codes.pick[order]
-        x_in = pe if order is None else pe[order]
-        h = x_in
-        for i, layer in enumerate(self.trunk_layers):
-            assert isinstance(layer, ExpertLinear)
-            weight, bias = layer.mixed(codes.mix)  # (B, out, in), (B, out)
-            if i in (0, self.skip):
-                x = x_in if i == 0 else torch.cat([h, x_in], dim=-1)
-                per_object = torch.einsum("boi,bi->bo", weight[:, :, x.shape[1] :], codes.table) + bias
-                h = grouped_linear(x, weight[:, :, : x.shape[1]], counts) + pick @ per_object
-            else:
-                h = grouped_linear(h, weight, counts) + pick @ bias
-            h = torch.relu(h)
-        if order is None:
-            return h
-        return torch.empty_like(h).index_copy_(0, order, h)
 
     def beta(self) -> torch.Tensor | None:
         """The Laplace scale of a signed-distance field (0-d, metres), or None."""

@@ -305,11 +305,7 @@ class GSNeRF(MultiViewNeRF):
         return sample
 
     def auxiliary_losses(
-        self,
-        encoding: GeoEncoding,
-        input_depth: torch.Tensor | None = None,
-        input_labels: torch.Tensor | None = None,
-        object_families: torch.Tensor | None = None,
+        self, encoding: GeoEncoding, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
     ) -> dict[str, torch.Tensor]:
         """``loss/source_depth``: :data:`SOURCE_DEPTH_WEIGHT` x :meth:`source_depth_loss` (empty without depth)."""
         if input_depth is None:

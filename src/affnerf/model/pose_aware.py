@@ -130,7 +130,6 @@ class PoseAwareNeRF(ConditionedNeRF):
         encoding: PoseAwareCodes,
         input_depth: torch.Tensor | None = None,
         input_labels: torch.Tensor | None = None,
-        object_families: torch.Tensor | None = None,
     ) -> dict[str, torch.Tensor]:
         """``loss/camera``: the camera head against the true input cameras (empty without them)."""
         if encoding.true_camera is None:

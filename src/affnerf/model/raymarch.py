@@ -106,7 +106,6 @@ class FieldRenderer(nn.Module):
                 color_code_dim=color_cond_dim,
                 film=config.conditioning == "film",
                 sdf=config.geometry == "sdf",
-                experts=config.experts,
             )
 
         self.coarse = field()

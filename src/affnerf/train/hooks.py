@@ -27,7 +27,7 @@ from affnerf.train.validate import validate
 #: a signed-distance field ``loss/point_distance``; with
 #: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``; with AFF-NeRF's
-#: pixel-labelling head ``loss/view_affordance``; with weight experts ``loss/router``; each weighted) and
+#: pixel-labelling head ``loss/view_affordance``; each weighted) and
 #: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``).
 IterationOutputs = dict[str, torch.Tensor | float]
 
@@ -80,7 +80,6 @@ class LogScalars:
         "loss/source_depth",
         "loss/view_consistency",
         "loss/view_affordance",
-        "loss/router",
     )
 
     #: The step's scheduled values (floats, the same on every rank): logged as they are, never averaged.

@@ -62,8 +62,6 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
     base, added = grown_config(data, dataclasses.replace(model.config, coarse_field="own") if shrink else model.config)
     check_compatible(data, base, num_classes, path)
     weights = one_field_weights(inference_weights(data)) if shrink else inference_weights(data)
-    if "router." in added:
-        weights = expert_weights(weights, model.config.experts)
     missing, unexpected = model.load_state_dict(weights, strict=not added)
     if unexpected or any(not any(part in key for part in added) for key in missing):
         raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
@@ -83,29 +81,15 @@ def one_field_weights(weights: dict[str, torch.Tensor]) -> dict[str, torch.Tenso
     return {k.replace("renderer.fine.", "renderer.coarse.", 1): v for k, v in kept.items()}
 
 
-def expert_weights(weights: dict[str, torch.Tensor], experts: int) -> dict[str, torch.Tensor]:
-    """A plain field's weights for the same model with ``experts`` weight sets per trunk layer: each layer's weight
-    (out, in) and bias (out,) repeated into (E, out, in) and (E, out), so every set starts as the trained layer."""
-
-    def grown(key: str, value: torch.Tensor) -> torch.Tensor:
-        if ".trunk_layers." not in key or not key.endswith((".weight", ".bias")):
-            return value
-        return value.unsqueeze(0).repeat(experts, *([1] * value.dim()))
-
-    return {k: grown(k, v) for k, v in weights.items()}
-
-
 def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig, tuple[str, ...]]:
     """The configuration a checkpoint must match (:func:`check_compatible`) for ``config``'s model to start from
     it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
     concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
-    pixel-labelling head the checkpoint lacks, ``router.`` when ``config`` asks for weight experts and the
-    checkpoint's field has one set (:func:`expert_weights`). (Fields that do not change the weights, such as the
-    encoders' crop side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
+    pixel-labelling head the checkpoint lacks. (Fields that do not change the weights, such as the encoders' crop
+    side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
 
-    Every start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), the
-    labelling head only adds a training loss, and experts that are copies of one layer compute it under any
-    mixture, so the grown model computes what the checkpoint did.
+    Both starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
+    labelling head only adds a training loss, so the grown model computes what the checkpoint did.
     """
     saved = data.get("model_config", {})
     added: list[str] = []
@@ -115,9 +99,6 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     if config.view_affordance_weight > 0 and not saved.get("view_affordance_weight", 0.0):
         config = dataclasses.replace(config, view_affordance_weight=0.0)
         added.append(".label_head.")
-    if config.experts > 1 and saved.get("experts", 1) == 1:
-        config = dataclasses.replace(config, experts=1)
-        added.append("router.")
     return config, tuple(added)
 
 

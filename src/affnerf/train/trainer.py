@@ -151,21 +151,17 @@ class TrainingPass(torch.nn.Module):
         self.consistency_weight = consistency_weight
 
     def forward(
-        self,
-        batch: RayBatch,
-        generator: torch.Generator,
-        points: PointBatch | None = None,
-        families: torch.Tensor | None = None,
+        self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
     ) -> tuple[RayOutputs, RayOutputs | None, list[PointGeometry] | None, dict[str, torch.Tensor]]:
         """(coarse, fine, per-field geometry at the points or None, the model's auxiliary losses), as
-        ``model.forward`` + points; ``families``: the (B,) objects' family indices, for the losses."""
+        ``model.forward`` + points."""
         m, v = self.model, self.encoded_views
         encoding = m.encode_views(batch.images[:, :v], batch.input_intrinsics[:, :v], batch.input_poses[:, :v])
         coarse, fine = m.render_rays(
             encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
         )
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
-        auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v], batch.input_labels[:, :v], families)
+        auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v], batch.input_labels[:, :v])
         if self.consistency_weight > 0:
             other = m.encode_views(batch.images[:, v:], batch.input_intrinsics[:, v:], batch.input_poses[:, v:])
             agreement = code_consistency(encoding.shape, other.shape) + code_consistency(
@@ -173,20 +169,6 @@ class TrainingPass(torch.nn.Module):
             )
             auxiliary["loss/view_consistency"] = self.consistency_weight * agreement / 2
         return coarse, fine, geometry, auxiliary
-
-
-def object_families(config: TrainConfig, ds: Dataset) -> dict[str, int]:
-    """Each training object's family, as its index among the training split's sorted families; with weight
-    experts (``model.experts`` > 1) there must be one expert per family."""
-    entries = ds.objects("train", config.categories)
-    names = sorted({e.category for e in entries})
-    experts = config.model.experts
-    if experts > 1 and experts != len(names):
-        raise AffnerfError(
-            f"{ds.root / 'dataset.json'}: --model.experts {experts} needs one expert per training family, "
-            f"and the training split has {len(names)} ({', '.join(names)})"
-        )
-    return {e.id: names.index(e.category) for e in entries}
 
 
 def _validation_objects(config: TrainConfig, ds: Dataset) -> list[ObjectData]:
@@ -224,7 +206,6 @@ class Trainer:
         self.end = min(config.steps, config.stop_at) if config.stop_at > 0 else config.steps
         self.scalars: dict[str, float] = {}
         self.class_weight: torch.Tensor | None = None
-        self.families: dict[str, int] = {}
 
     def setup(self) -> None:
         """Open the dataset, prepare the run folder, cache the training frames (and, with ``points_weight`` > 0,
@@ -235,8 +216,6 @@ class Trainer:
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
-        if config.model.experts > 1:
-            self.families = object_families(config, self.dataset)
         frames = _load_frames(config, self.dataset, ctx)
         self.state = self._build_state(frames)
         if config.affordance_balance > 0:
@@ -350,11 +329,7 @@ class Trainer:
     ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         """The step's total loss and its detached parts (see :meth:`train_iteration`); ``mu``: the points' weight."""
         config = self.config
-        families = None
-        if self.families:
-            ids = [self.families[i] for i in batch.object_ids]
-            families = torch.tensor(ids, dtype=torch.long, device=batch.images.device)
-        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points, families)
+        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points)
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
         parts = {
