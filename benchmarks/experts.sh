@@ -5,7 +5,7 @@
 # as long as the steps it takes in LIMIT minutes (a step of the experts run costs about 12 % more); then both
 # calibrated and scored on val40.
 #   DATA=... benchmarks/experts.sh      (LIMIT minutes; STEPS_PLAIN, STEPS_EXPERTS: the schedules' lengths)
-# The option was removed after this measurement: run it in a checkout of commit 1bf62e4.
+# The option was removed after this measurement: run the script of commit 1bf62e4 in a checkout of it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -17,10 +17,4 @@ CACHE="${CACHE:-$W/cache}"
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
-warm_cache "$CACHE"
-timed_small_run plain "$STEPS_PLAIN" --cache-dir "$CACHE" &
-timed_small_run experts "$STEPS_EXPERTS" --cache-dir "$CACHE" --model.experts 8 &
-wait
-calibrated_val40 plain "$W/plain" &
-calibrated_val40 experts "$W/experts" &
-wait
+scored_pair plain "$STEPS_PLAIN" -- experts "$STEPS_EXPERTS" --model.experts 8

@@ -15,10 +15,4 @@ CACHE="${CACHE:-$W/cache}"
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
-warm_cache "$CACHE"
-timed_small_run half "$STEPS" --cache-dir "$CACHE" &
-timed_small_run "fg$FRACTION" "$STEPS" --cache-dir "$CACHE" --foreground-fraction "$FRACTION" &
-wait
-calibrated_val40 half "$W/half" &
-calibrated_val40 "fg$FRACTION" "$W/fg$FRACTION" &
-wait
+scored_pair half "$STEPS" -- "fg$FRACTION" "$STEPS" --foreground-fraction "$FRACTION"

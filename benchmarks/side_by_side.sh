@@ -88,6 +88,25 @@ val40() {
         --target-views 5 --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
 }
 
+# scored_pair NAME_A STEPS_A [OPTIONS_A...] -- NAME_B STEPS_B [OPTIONS_B...]: the frame and point cache CACHE
+# built, then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on CACHE), then each calibrated and
+# scored by val40, side by side (experts.sh, foreground_fraction.sh).
+scored_pair() {
+    local first=()
+    while [ "$1" != "--" ]; do
+        first+=("$1")
+        shift
+    done
+    shift
+    warm_cache "$CACHE"
+    timed_small_run "${first[0]}" "${first[1]}" --cache-dir "$CACHE" "${first[@]:2}" &
+    timed_small_run "$1" "$2" --cache-dir "$CACHE" "${@:3}" &
+    wait
+    calibrated_val40 "${first[0]}" "$W/${first[0]}" &
+    calibrated_val40 "$1" "$W/$1" &
+    wait
+}
+
 # calibrated_val40 NAME RUN: RUN's mesh level calibrated on 32 validation objects (stored in its checkpoint), then
 # val40 of it as W/val40_NAME (shared_field.sh, weight_average.sh, affordance_weight.sh).
 calibrated_val40() {
