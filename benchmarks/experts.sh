@@ -2,7 +2,7 @@
 # Weight experts at equal wall time (issue 12; benchmarks/results/experts.md): the `small` preset as it ships against
 # the same preset with one trunk weight set per family mixed per object by a router on the shape code
 # (`--model.experts 8`, affnerf/model/experts.py), from scratch, side by side, one core each, each with a schedule
-# as long as the steps it takes in LIMIT minutes (a step of the experts run costs about 12 % more); then both
+# as long as the steps it takes in LIMIT minutes (a step of the experts run costs about 13 % more); then both
 # calibrated and scored on val40.
 #   DATA=... benchmarks/experts.sh      (LIMIT minutes; STEPS_PLAIN, STEPS_EXPERTS: the schedules' lengths)
 # The option was removed after this measurement: run the script of commit 1bf62e4 in a checkout of it.
