@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from affnerf.data.dataset import Dataset
 from affnerf.train.cache import ObjectFrames, cached_frames
@@ -66,6 +67,33 @@ def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
     assert 0 <= u[0] < 7 and 0 <= v[0] < 5
 
 
+def test_near_rays_land_within_the_band_around_the_object():
+    labels = np.zeros((1, 20, 30), np.uint8)
+    labels[0, 8:12, 10:14] = 2  # a 4 x 4 object
+    flat = np.flatnonzero(labels[0]).astype(np.int32)
+    frames = ObjectFrames(
+        "toy", np.zeros((1, 20, 30, 3), np.uint8), labels, np.zeros((1, 20, 30), np.float16),
+        np.zeros((1, 4, 4, 3), np.uint8), np.zeros((1, 4)), np.array([0, len(flat)]), flat,
+        np.tile(np.eye(4), (1, 1, 1)), np.ones(4), np.ones(3),
+    )  # fmt: skip
+    n = 4000
+    u, v = draw_pixels(np.random.default_rng(1), frames, np.zeros(n, int), np.zeros(n, bool), np.ones(n, bool), 3)
+    assert u.min() >= 7 and u.max() <= 16 and v.min() >= 5 and v.max() <= 14  # the object grown by 3 pixels
+    outside = labels[0, v, u] == 0
+    assert 0.3 < outside.mean() < 0.9  # both sides of the outline
+
+
+def test_outline_rays_take_the_uniform_share_and_zero_keeps_the_paper_draws(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    plain = RaySampler(frames, 2, 2000, 0.5, seed=4).next_batch()
+    zero = RaySampler(frames, 2, 2000, 0.5, seed=4, outline_fraction=0.0, outline_radius=3).next_batch()
+    np.testing.assert_array_equal(plain.origins.numpy(), zero.origins.numpy())
+    near = RaySampler(frames, 2, 2000, 0.5, seed=4, outline_fraction=0.5, outline_radius=2).next_batch()
+    assert (near.labels > 0).float().mean() > (plain.labels > 0).float().mean() + 0.1
+    with pytest.raises(ValueError, match="sum to at most 1"):
+        RaySampler(frames, 2, 8, 0.7, seed=0, outline_fraction=0.4)
+
+
 def test_each_epoch_visits_every_object_and_ranks_split_them(train_dataset, tmp_path):
     frames = _frames(train_dataset, tmp_path)
     n = len(frames)
@@ -114,3 +142,12 @@ def test_a_sampler_without_input_views_gives_empty_inputs_and_full_ray_batches(t
     assert batch.images.shape == (1, 0, 3, 32, 32) and batch.input_depth.shape == (1, 0, 32, 32)
     assert batch.input_labels.shape == (1, 0, 32, 32)
     assert batch.origins.shape == (64, 3) and batch.encoder_view.shape == (1, 0)
+
+
+def test_ray_shares_over_one_are_refused_with_one_line(tmp_path, capsys):
+    from affnerf.cli.main import main
+
+    argv = ["train", "--data", str(tmp_path), "--out", str(tmp_path / "run"), "--steps", "10"]
+    assert main([*argv, "--foreground-fraction", "0.7", "--outline-fraction", "0.4"]) == 2
+    assert "--outline-fraction are shares >= 0 summing to at most 1" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()

@@ -63,6 +63,10 @@ class TrainConfig:
         foreground_fraction: share of rays drawn on the object (the rest uniform over the image). 0.8 instead of
             0.5 taught the labels inside the object a little better and the outline worse (validation mIoU −0.038,
             PSNR −2 dB; benchmarks/results/foreground_fraction.md).
+        outline_fraction: share of rays drawn near the object, taken from the uniform ones: an object pixel moved by
+            up to ``outline_radius`` pixels along each image axis, so they teach the outline from both sides (0 =
+            off, the paper).
+        outline_radius: half-width in pixels of the training images (after ``image_scale``) of that band.
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
@@ -140,6 +144,8 @@ class TrainConfig:
     input_views: int = 1
     rays_per_step: int = 1024
     foreground_fraction: float = 0.5
+    outline_fraction: float = 0.0
+    outline_radius: int = 3
     affordance_weight: float = 4e-4
     affordance_balance: float = 0.0
     mask_weight: float = 0.0
@@ -244,6 +250,12 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
     if not 0.0 <= config.optim.ema_decay < 1.0:
         raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
+    shares = (config.foreground_fraction, config.outline_fraction)
+    if min(shares) < 0 or sum(shares) > 1 or config.outline_radius < 0:
+        raise AffnerfError(
+            "--foreground-fraction and --outline-fraction are shares >= 0 summing to at most 1 and "
+            f"--outline-radius is >= 0, not {shares[0]}, {shares[1]} and {config.outline_radius}"
+        )
     if config.optim.warmup_steps < 0:
         raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")
 

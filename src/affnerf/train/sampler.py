@@ -80,9 +80,14 @@ def other_views(rng: np.random.Generator, num_views: int, excluded: np.ndarray, 
 
 
 def draw_pixels(
-    rng: np.random.Generator, frames: ObjectFrames, views: np.ndarray, foreground: np.ndarray
+    rng: np.random.Generator,
+    frames: ObjectFrames,
+    views: np.ndarray,
+    foreground: np.ndarray,
+    near: np.ndarray | None = None,
+    radius: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Pixel (u, v) per ray: uniform over the image, or uniform over the object's pixels where asked.
+    """Pixel (u, v) per ray: uniform over the image, uniform over the object's pixels, or near the object.
 
     Args:
         rng: random source.
@@ -90,6 +95,10 @@ def draw_pixels(
         views: (R,) frame of each ray.
         foreground: (R,) bool, rays that should land on the object (a frame showing no object falls back to
             uniform).
+        near: (R,) bool or None, rays drawn near the object: an object pixel moved by a uniform integer offset in
+            [-radius, radius] along u and along v (clipped to the image), so they cover the object and a band of
+            ``radius`` pixels around its outline. Not also ``foreground``.
+        radius: the band's half-width in pixels of the frames.
 
     Returns:
         u (R,), v (R,) integer pixel indices.
@@ -97,11 +106,18 @@ def draw_pixels(
     _, h, w = frames.labels.shape
     flat = rng.integers(0, h * w, len(views))
     start, stop = frames.fg_offsets[views], frames.fg_offsets[views + 1]
-    pick = foreground & (stop > start)
+    on_object = foreground if near is None else foreground | near
+    pick = on_object & (stop > start)
     if pick.any():
         k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
         flat[pick] = frames.fg_pixels[k]
-    return flat % w, flat // w
+    u, v = flat % w, flat // w
+    shift = pick & near if near is not None else None
+    if shift is not None and shift.any():
+        offsets = rng.integers(-radius, radius + 1, (2, int(shift.sum())))
+        u[shift] = np.clip(u[shift] + offsets[0], 0, w - 1)
+        v[shift] = np.clip(v[shift] + offsets[1], 0, h - 1)
+    return u, v
 
 
 class RaySampler:
@@ -116,6 +132,9 @@ class RaySampler:
         input_views: views encoded per object (1 for AFF-NeRF).
         rank: this process's rank.
         world: number of processes.
+        outline_fraction: share of rays drawn near the object (:func:`draw_pixels`' ``near``), taken from the
+            uniform ones; 0 keeps the paper's rule and its exact sequence of draws.
+        outline_radius: their band's half-width in pixels of the frames.
     """
 
     def __init__(
@@ -128,9 +147,15 @@ class RaySampler:
         rank: int = 0,
         world: int = 1,
         input_views: int = 1,
+        outline_fraction: float = 0.0,
+        outline_radius: int = 0,
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
+        if foreground_fraction < 0 or outline_fraction < 0 or foreground_fraction + outline_fraction > 1:
+            raise ValueError(
+                f"ray shares must be >= 0 and sum to at most 1, not {foreground_fraction} + {outline_fraction}"
+            )
         for o in objects:
             if len(o) < input_views + 1:
                 raise ValueError(
@@ -142,6 +167,7 @@ class RaySampler:
         self.objects_per_step = objects_per_step
         self.rays_per_step = rays_per_step
         self.foreground_fraction = foreground_fraction
+        self.outline_fraction, self.outline_radius = outline_fraction, outline_radius
         self.seed, self.rank, self.world = seed, rank, world
         self.epoch, self.position = 0, 0
         self.rng = np.random.default_rng([seed, rank, 17])
@@ -174,8 +200,12 @@ class RaySampler:
             obj = self.objects[oi]
             enc = self.rng.choice(len(obj), self.input_views, replace=False)
             views = other_views(self.rng, len(obj), enc, int(count))
-            fg = self.rng.random(int(count)) < self.foreground_fraction
-            u, v = draw_pixels(self.rng, obj, views, fg)
+            share = self.rng.random(int(count))
+            fg = share < self.foreground_fraction
+            near = None
+            if self.outline_fraction:
+                near = ~fg & (share < self.foreground_fraction + self.outline_fraction)
+            u, v = draw_pixels(self.rng, obj, views, fg, near, self.outline_radius)
             crop_depth, crop_labels = crop_maps(obj, enc)
             images.append(
                 (np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)

@@ -252,6 +252,8 @@ class Trainer:
             ctx.rank,
             ctx.world,
             config.input_views + (1 if config.view_consistency_weight > 0 else 0),
+            config.outline_fraction,
+            config.outline_radius,
         )
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
