@@ -60,9 +60,10 @@ class TrainConfig:
         objects_per_step: objects per step and per process (each with its own encoded view).
         input_views: views encoded per object (1 for AFF-NeRF; 3 for the multi-view PixelNeRF baseline).
         rays_per_step: rays per step and per process.
-        foreground_fraction: share of rays drawn on the object (the rest uniform over the image). 0.8 instead of
-            0.5 taught the labels inside the object a little better and the outline worse (validation mIoU −0.038,
-            PSNR −2 dB; benchmarks/results/foreground_fraction.md).
+        foreground_fraction: share of rays drawn on the object (the rest near it, ``outline_fraction``, or uniform
+            over the image). 0.8 instead of 0.5, with no rays near the outline, taught the labels inside the object
+            a little better and the outline worse (validation mIoU −0.038, PSNR −2 dB;
+            benchmarks/results/foreground_fraction.md).
         outline_fraction: share of rays drawn near the object, taken from the uniform ones: an object pixel moved by
             up to ``outline_radius`` pixels along each image axis, so they teach the outline from both sides (0 =
             off, the paper). The ``small`` preset draws 0.4 so (0.5 on the object, 0.1 uniform): against 0.5 / 0 /
