@@ -97,7 +97,8 @@ def draw_pixels(
             uniform).
         near: (R,) bool or None, rays drawn near the object: an object pixel moved by a uniform integer offset in
             [-radius, radius] along u and along v (clipped to the image), so they cover the object and a band of
-            ``radius`` pixels around its outline. Not also ``foreground``.
+            ``radius`` pixels around its outline (uniform, as ``foreground``, where the frame shows no object).
+            Not also ``foreground``.
         radius: the band's half-width in pixels of the frames.
 
     Returns:
