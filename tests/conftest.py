@@ -79,7 +79,9 @@ def tiny_train_config(train_dataset, tmp_path):
             device="cpu",
             cache_dir=tmp_path / "cache",
             image_scale=1.0,
-            # the paper's loss unless a test asks for more (tests/train/test_quality_options.py turns them on)
+            # the paper's loss and ray rule unless a test asks for more (tests/train/test_quality_options.py turns
+            # them on)
+            outline_fraction=0.0,
             points_weight=0.0,
             mask_weight=0.0,
             depth_weight=0.0,

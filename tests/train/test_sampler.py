@@ -7,6 +7,7 @@ import pytest
 
 from affnerf.data.dataset import Dataset
 from affnerf.train.cache import ObjectFrames, cached_frames
+from affnerf.train.config import PAPER, SMALL
 from affnerf.train.sampler import RaySampler, draw_pixels
 
 
@@ -151,3 +152,17 @@ def test_ray_shares_over_one_are_refused_with_one_line(tmp_path, capsys):
     assert main([*argv, "--foreground-fraction", "0.7", "--outline-fraction", "0.4"]) == 2
     assert "--outline-fraction are shares >= 0 summing to at most 1" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()
+
+
+def test_the_trainer_draws_the_configs_outline_rays(tiny_train_config):
+    import torch
+
+    from affnerf.train import distributed
+    from affnerf.train.trainer import Trainer
+
+    cpu = distributed.Context(rank=0, world=1, device=torch.device("cpu"))
+    trainer = Trainer(tiny_train_config(steps=1, outline_fraction=0.4, outline_radius=2), cpu)
+    trainer.setup()
+    sampler = trainer.state.sampler
+    assert (sampler.foreground_fraction, sampler.outline_fraction, sampler.outline_radius) == (0.5, 0.4, 2)
+    assert SMALL.outline_fraction == 0.4 and PAPER.outline_fraction == 0.0
