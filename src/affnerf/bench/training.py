@@ -33,10 +33,7 @@ def training_step(
     torch.manual_seed(0)
     model = build_model(config.model, 12).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=1e-4)
-    sampler = RaySampler(
-        frames, config.objects_per_step, config.rays_per_step, config.foreground_fraction, 0,
-        input_views=config.input_views,
-    )  # fmt: skip
+    sampler = RaySampler.for_config(frames, replace(config, seed=0))
     drawn = [sampler.next_batch().to(device) for _ in range(batches)]
     generator = torch.Generator().manual_seed(0)
     position = [0]

@@ -11,7 +11,7 @@ checkpoints so a resumed run continues with exactly the same data. With 3D super
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -20,6 +20,9 @@ from affnerf.data.crop import resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames
 from affnerf.train.points import PointSet
+
+if TYPE_CHECKING:
+    from affnerf.train.config import TrainConfig
 
 
 @dataclass
@@ -113,8 +116,8 @@ def draw_pixels(
         k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
         flat[pick] = frames.fg_pixels[k]
     u, v = flat % w, flat // w
-    shift = pick & near if near is not None else None
-    if shift is not None and shift.any():
+    shift = pick & near if near is not None else np.zeros_like(pick)
+    if shift.any():
         offsets = rng.integers(-radius, radius + 1, (2, int(shift.sum())))
         u[shift] = np.clip(u[shift] + offsets[0], 0, w - 1)
         v[shift] = np.clip(v[shift] + offsets[1], 0, h - 1)
@@ -173,6 +176,25 @@ class RaySampler:
         self.epoch, self.position = 0, 0
         self.rng = np.random.default_rng([seed, rank, 17])
         self._order = self._epoch_order(0)
+
+    @classmethod
+    def for_config(
+        cls, objects: list[ObjectFrames], config: TrainConfig, rank: int = 0, world: int = 1, input_views: int = 0
+    ) -> RaySampler:
+        """The sampler of a training config (its objects, rays and ray shares a step, its seed); ``input_views``
+        overrides the config's (0 keeps it)."""
+        return cls(
+            objects,
+            config.objects_per_step,
+            config.rays_per_step,
+            config.foreground_fraction,
+            config.seed,
+            rank,
+            world,
+            input_views or config.input_views,
+            config.outline_fraction,
+            config.outline_radius,
+        )
 
     def _epoch_order(self, epoch: int) -> np.ndarray:
         """This rank's objects for ``epoch``: its slice of a shuffle shared by all ranks."""

@@ -243,18 +243,8 @@ class Trainer:
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
         optimizer = make_optimizer(model, config.optim.lr, ctx.device)
-        sampler = RaySampler(
-            frames,
-            config.objects_per_step,
-            config.rays_per_step,
-            config.foreground_fraction,
-            config.seed,
-            ctx.rank,
-            ctx.world,
-            config.input_views + (1 if config.view_consistency_weight > 0 else 0),
-            config.outline_fraction,
-            config.outline_radius,
-        )
+        views = config.input_views + (1 if config.view_consistency_weight > 0 else 0)
+        sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world, views)
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
         return TrainingState(model, optimizer, sampler, generator, ema=ema)
