@@ -68,8 +68,11 @@ class TrainConfig:
             up to ``outline_radius`` pixels along each image axis, so they teach the outline from both sides (0 =
             off, the paper). The ``small`` preset draws 0.4 so (0.5 on the object, 0.1 uniform): against 0.5 / 0 /
             0.5 at equal steps, validation mIoU +0.012 / +0.014 on two seeds, PSNR +0.5 dB, 3D affordance mIoU
-            +0.02 / +0.05 (benchmarks/results/outline_rays.md).
-        outline_radius: half-width in pixels of the training images (after ``image_scale``) of that band.
+            +0.02 / +0.05 (benchmarks/results/outline_rays.md); a share of 0.25 was behind it on both splits
+            (benchmarks/results/outline_share.md).
+        outline_radius: half-width in pixels of the training images (after ``image_scale``) of that band. The
+            preset's 3; 6 raised 2D mIoU, PSNR and F@1cm a little and cost 0.035-0.057 3D affordance mIoU
+            (benchmarks/results/outline_share.md, one seed).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
