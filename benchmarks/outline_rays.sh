@@ -20,6 +20,6 @@ CACHE="${CACHE:-$W/cache}"
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
-tag=$([ "$SEED" = 0 ] || echo "_s$SEED")
+tag=$(seed_tag)
 scored_pair "half$tag" "$STEPS" --seed "$SEED" --outline-fraction 0 -- "outline$SHARE$tag" "$STEPS" --seed "$SEED" \
     --outline-fraction "$SHARE" --outline-radius "$RADIUS"

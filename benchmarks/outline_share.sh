@@ -17,7 +17,7 @@ CACHE="${CACHE:-$W/cache}"
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
-tag=$([ "$SEED" = 0 ] || echo "_s$SEED")
+tag=$(seed_tag)
 scored_pair "share0.25$tag" "$STEPS" --seed "$SEED" --outline-fraction 0.25 --outline-radius 3 -- \
     "radius6$tag" "$STEPS" --seed "$SEED" --outline-fraction 0.4 --outline-radius 6
 test64 "share0.25$tag" "$W/share0.25$tag" &

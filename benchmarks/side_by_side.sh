@@ -4,6 +4,11 @@
 # Needs DATA, W and LIMIT (a run's time limit in minutes).
 # shellcheck shell=bash
 
+# seed_tag: the suffix of a run's name for the training seed SEED (none for seed 0, "_s1" for seed 1).
+seed_tag() {
+    [ "${SEED:-0}" = 0 ] || echo "_s$SEED"
+}
+
 # warm_cache CACHE [TRAIN OPTIONS...]: build the frame and point cache of DATA in CACHE (a one-step run in W/warm,
 # with the options that change the crops) before any run is timed, so no run pays for decoding.
 warm_cache() {
