@@ -178,11 +178,10 @@ class RaySampler:
         self._order = self._epoch_order(0)
 
     @classmethod
-    def for_config(
-        cls, objects: list[ObjectFrames], config: TrainConfig, rank: int = 0, world: int = 1, input_views: int = 0
-    ) -> RaySampler:
-        """The sampler of a training config (its objects, rays and ray shares a step, its seed); ``input_views``
-        overrides the config's (0 keeps it)."""
+    def for_config(cls, objects: list[ObjectFrames], config: TrainConfig, rank: int = 0, world: int = 1) -> RaySampler:
+        """The sampler of a training config: its objects, rays and ray shares a step, its seed, and its encoded
+        views (one more for the view-consistency loss's second view)."""
+        views = config.input_views + (1 if config.view_consistency_weight > 0 else 0)
         return cls(
             objects,
             config.objects_per_step,
@@ -191,7 +190,7 @@ class RaySampler:
             config.seed,
             rank,
             world,
-            input_views or config.input_views,
+            views,
             config.outline_fraction,
             config.outline_radius,
         )

@@ -243,8 +243,7 @@ class Trainer:
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
         optimizer = make_optimizer(model, config.optim.lr, ctx.device)
-        views = config.input_views + (1 if config.view_consistency_weight > 0 else 0)
-        sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world, views)
+        sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world)
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
         return TrainingState(model, optimizer, sampler, generator, ema=ema)
