@@ -8,6 +8,7 @@ import torch
 from support import SEGMENT_EXTRA_MISSING, salient_weights
 
 from affnerf.data.dataset import Dataset
+from affnerf.errors import AffnerfError
 from affnerf.model.segmenter import SegmenterConfig, build_segmenter, load_segmenter, object_probability
 from affnerf.train import segmenter
 
@@ -84,3 +85,42 @@ def test_subjects_are_the_salient_things_cut_out_of_the_photos():
     assert 1 <= len(subjects) <= 3
     for cut in subjects:  # each is the disk (or the part of it in a zoomed crop), not the card
         assert cut.mask.mean() > 0.5 and (cut.rgb[cut.mask][:, 0] > cut.rgb[cut.mask][:, 1] + 80).mean() > 0.9
+
+
+def test_the_step_loss_is_the_mean_of_each_photos_loss():
+    g = torch.Generator().manual_seed(0)
+    logits, masks = torch.randn(4, 1, 8, 8, generator=g), (torch.rand(4, 1, 8, 8, generator=g) > 0.5).float()
+    per = segmenter.photo_losses(logits, masks)
+    assert per.shape == (4,)
+    assert segmenter.segmentation_loss(logits, masks) == pytest.approx(float(per.mean()), rel=1e-6)
+    assert per[0] == pytest.approx(float(segmenter.segmentation_loss(logits[:1], masks[:1])), rel=1e-6)
+
+
+def test_hard_draws_follow_the_last_losses_and_no_hard_share_draws_uniformly():
+    last = torch.full((10,), float("nan"))
+    uniform = segmenter.draw_batch(last, 6, 0.0, torch.Generator().manual_seed(4))
+    assert torch.equal(uniform, torch.randint(0, 10, (6,), generator=torch.Generator().manual_seed(4)))
+    # nothing drawn yet: every draw is uniform, whatever the share
+    assert torch.equal(segmenter.draw_batch(last, 6, 0.5, torch.Generator().manual_seed(4)), uniform)
+    last[:] = 0.0
+    last[7] = 5.0
+    picks = segmenter.draw_batch(last, 200, 0.5, torch.Generator().manual_seed(1))
+    assert (picks[100:] == 7).all() and (picks[:100] != 7).sum() > 70  # the hard half on the one hard photo
+    last[8] = float("nan")  # an undrawn photo counts as the mean of the drawn ones (0.5 here)
+    hard = segmenter.draw_batch(last, 4000, 1.0, torch.Generator().manual_seed(2))
+    assert 0.05 < float((hard == 8).float().mean()) < 0.13  # 0.5 / 5.5 of the weight
+
+
+def test_a_hard_share_outside_zero_to_one_is_refused_before_anything_is_written(train_dataset, tmp_path):
+    cfg = segmenter.SegmenterTrainConfig(data=train_dataset, out=tmp_path / "s.pt", steps=1, pool=4, hard_share=1.5)
+    with pytest.raises(AffnerfError, match="hard-share"):
+        segmenter.train_segmenter(cfg)
+    assert not cfg.out.exists()
+
+
+def test_a_run_with_a_hard_share_trains(train_dataset, trained_segmenter, tmp_path):
+    cfg = segmenter.SegmenterTrainConfig(
+        data=train_dataset, out=tmp_path / "hard.pt", steps=3, batch=4, pool=6, val_photos=2, hard_share=0.5,
+        init=trained_segmenter,
+    )  # fmt: skip
+    assert segmenter.train_segmenter(cfg)["steps_done"] == 3 and cfg.out.exists()

@@ -69,6 +69,10 @@ class SegmenterTrainConfig:
             photo (a person, a cup) is not taken for the object. 0 = none.
         precision: ``bf16`` runs each step's forward pass under bfloat16 autocast (weights and Adam state stay
             float32), about twice as fast for U²-Net-p on a CPU with bfloat16 instructions; ``fp32`` as before.
+        hard_share: share of each batch drawn from the pool's hard photos (prioritised by loss, for a further stage
+            of a trained segmenter): those are drawn with a probability proportional to the loss each photo had when
+            last drawn (photos not drawn yet count as the mean of those that were), the rest of the batch uniformly
+            as usual. 0 = every draw uniform (the earlier stages' rule, draw for draw).
         network: the network's shape.
     """
 
@@ -87,6 +91,7 @@ class SegmenterTrainConfig:
     init_salient: bool = False
     subjects: int = 0
     precision: Precision = "fp32"
+    hard_share: float = 0.0
     network: SegmenterConfig = SegmenterConfig()
 
 
@@ -181,23 +186,60 @@ def learning_rate(peak: float, step: int, steps: int) -> float:
     return cosine_fall(peak, 0.05 * peak, step / steps)
 
 
-def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """Binary cross-entropy plus soft Dice (1 - 2|P∩M| / (|P| + |M|)) of (N, 1, H, W) logits and 0/1 masks."""
-    bce = F.binary_cross_entropy_with_logits(logits, masks)
+def pixel_bce(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+    """(N,) binary cross-entropy of (N, 1, H, W) logits against 0/1 masks, averaged over each photo's pixels."""
+    return F.binary_cross_entropy_with_logits(logits, masks, reduction="none").mean(dim=(1, 2, 3))
+
+
+def photo_losses(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+    """(N,) binary cross-entropy plus soft Dice (1 - 2|P∩M| / (|P| + |M|)) of each photo's (N, 1, H, W) logits
+    against its 0/1 mask."""
     p = torch.sigmoid(logits)
     inter = (p * masks).sum(dim=(1, 2, 3))
     dice = 1.0 - (2.0 * inter + 1.0) / (p.sum(dim=(1, 2, 3)) + masks.sum(dim=(1, 2, 3)) + 1.0)
-    return bce + dice.mean()
+    return pixel_bce(logits, masks) + dice
+
+
+def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+    """The batch mean of :func:`photo_losses` (all photos of a batch have the same size, so the cross-entropy term
+    is the mean over every pixel of the batch)."""
+    return photo_losses(logits, masks).mean()
+
+
+def step_losses(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+    """(N,) training loss of each photo of a batch: :func:`photo_losses` of the output, and for U²-Net-p also the
+    mean binary cross-entropy of its six side outputs (its deep supervision)."""
+    if not isinstance(model, SalientSegmenter):
+        return photo_losses(model(images), masks)
+    fused, sides = model.side_logits(images)
+    side_bce = torch.stack([pixel_bce(s.float(), masks) for s in sides]).mean(dim=0)
+    return photo_losses(fused.float(), masks) + side_bce
 
 
 def step_loss(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """The training loss of one batch: :func:`segmentation_loss` of the output, and for U²-Net-p also the mean
-    binary cross-entropy of its six side outputs (its deep supervision)."""
-    if not isinstance(model, SalientSegmenter):
-        return segmentation_loss(model(images), masks)
-    fused, sides = model.side_logits(images)
-    side_bce = torch.stack([F.binary_cross_entropy_with_logits(s.float(), masks) for s in sides]).mean()
-    return segmentation_loss(fused.float(), masks) + side_bce
+    """The training loss of one batch: the mean of :func:`step_losses`."""
+    return step_losses(model, images, masks).mean()
+
+
+def draw_batch(last_loss: torch.Tensor, batch: int, hard_share: float, g: torch.Generator) -> torch.Tensor:
+    """(batch,) pool indices of one step: ``round(hard_share * batch)`` drawn with a probability proportional to
+    ``last_loss`` ((pool,) the loss of each photo when last drawn, NaN before its first draw, which counts as the
+    mean of the drawn ones), the rest uniformly (all of them while nothing has been drawn, or with no hard share:
+    then exactly the draws of a uniform rule).
+
+    Example:
+        >>> last = torch.tensor([float("nan"), 0.0, 0.0, 4.0])
+        >>> draw_batch(last, 4, 0.5, torch.Generator().manual_seed(0))[2:].tolist()
+        [3, 3]
+    """
+    pool = last_loss.shape[0]
+    drawn = ~torch.isnan(last_loss)
+    hard = round(hard_share * batch) if drawn.any() else 0
+    uniform = torch.randint(0, pool, (batch - hard,), generator=g)
+    if not hard:
+        return uniform
+    weight = torch.where(drawn, last_loss, last_loss[drawn].mean()).clamp(min=0.0) + 1e-8
+    return torch.cat([uniform, torch.multinomial(weight, hard, replacement=True, generator=g)])
 
 
 @torch.no_grad()
@@ -223,7 +265,13 @@ def network_size(config: SegmenterConfig) -> tuple[int, int]:
 
 
 def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
-    """Train the segmenter and write it to ``cfg.out``; returns the training record (also stored in the file)."""
+    """Train the segmenter and write it to ``cfg.out``; returns the training record (also stored in the file).
+
+    Raises:
+        AffnerfError: a hard share outside [0, 1] (before anything is made or written).
+    """
+    if not 0.0 <= cfg.hard_share <= 1.0:
+        raise AffnerfError(f"--hard-share must lie in [0, 1] (got {cfg.hard_share})")
     torch.manual_seed(cfg.seed)
     rng, g = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
     model = initial_segmenter(cfg)
@@ -237,15 +285,18 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
     model.train()
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=1e-4)
     curve, step, loss = [], 0, torch.zeros(())
+    last_loss = torch.full((cfg.pool,), float("nan"))
     while step < cfg.steps:
         if cfg.time_limit_min and time.perf_counter() - start > 60 * cfg.time_limit_min:
             break
         for group in opt.param_groups:
             group["lr"] = learning_rate(cfg.lr, step, cfg.steps)
-        pick = torch.randint(0, cfg.pool, (cfg.batch,), generator=g)
+        pick = draw_batch(last_loss, cfg.batch, cfg.hard_share, g)
         x, m = augment_batch(train[0][pick], train[1][pick], cfg.jitter, g)
         with forward_precision(cfg.precision, x.device):
-            loss = step_loss(model, x, m)
+            losses = step_losses(model, x, m)
+        loss = losses.mean()
+        last_loss[pick] = losses.detach().float()
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
