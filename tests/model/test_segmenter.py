@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -92,3 +94,35 @@ def test_a_trained_segmenter_finds_its_objects_on_a_photo_it_never_saw(train_dat
         rgb, alpha = paste(rng, photo, cut_to_box(obj.rgb(view), obj.affordance(view) > 0), scale=(0.4, 0.7))
         ious.append(mask_iou(segnet.object_probability(model, rgb) > segnet.SEGMENTER_THRESHOLD, alpha > 0.5))
     assert np.mean(ious) > 0.3, ious
+
+
+def test_an_ensemble_votes_with_each_member_at_its_own_size(tmp_path):
+    torch.manual_seed(0)
+    small, large = segnet.ObjectSegmenter(TINY).eval(), segnet.ObjectSegmenter(replace(TINY, input_side=64)).eval()
+    photo = np.random.default_rng(2).integers(0, 255, (30, 40, 3), np.uint8)
+    ensemble = segnet.SegmenterEnsemble([small, large])
+    expected = (segnet.object_probability(small, photo) + segnet.object_probability(large, photo)) / 2
+    assert np.allclose(segnet.object_probability(ensemble, photo), expected, atol=1e-6)
+    assert not np.allclose(segnet.object_probability(small, photo), segnet.object_probability(large, photo))
+
+
+def test_combined_segmenters_are_saved_and_read_back_as_one_ensemble(tmp_path):
+    torch.manual_seed(0)
+    a, b = segnet.ObjectSegmenter(TINY).eval(), segnet.ObjectSegmenter(replace(TINY, input_side=64)).eval()
+    segnet.save_segmenter(a, tmp_path / "a.pt")
+    segnet.save_segmenter(b, tmp_path / "b.pt")
+    segnet.combine_segmenters([tmp_path / "a.pt", tmp_path / "b.pt"], tmp_path / "ab.pt", {"note": "two"})
+    both = segnet.combine_segmenters([tmp_path / "ab.pt", tmp_path / "a.pt"], tmp_path / "aba.pt")  # flattened
+    read = segnet.read_segmenter(tmp_path / "ab.pt")
+    assert isinstance(read, segnet.SegmenterEnsemble) and [m.config for m in read.members] == [a.config, b.config]
+    assert len(both.members) == 3 and torch.load(tmp_path / "ab.pt", weights_only=True)["provenance"] == {"note": "two"}
+    photo = np.random.default_rng(3).integers(0, 255, (30, 40, 3), np.uint8)
+    want = segnet.object_probability(segnet.SegmenterEnsemble([a, b]), photo)
+    assert np.array_equal(segnet.object_probability(read, photo), want)
+
+
+def test_combining_a_file_that_is_not_a_segmenter_is_an_error_naming_it(tmp_path):
+    (tmp_path / "bad.pt").write_text("no")
+    with pytest.raises(AffnerfError, match="bad.pt: not an affnerf object segmenter"):
+        segnet.combine_segmenters([tmp_path / "bad.pt"], tmp_path / "out.pt")
+    assert not (tmp_path / "out.pt").exists()

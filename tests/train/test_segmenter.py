@@ -124,3 +124,15 @@ def test_a_run_with_a_hard_share_trains(train_dataset, trained_segmenter, tmp_pa
         init=trained_segmenter,
     )  # fmt: skip
     assert segmenter.train_segmenter(cfg)["steps_done"] == 3 and cfg.out.exists()
+
+
+def test_training_from_an_ensemble_is_refused_naming_the_file(train_dataset, trained_segmenter, tmp_path):
+    from affnerf.model.segmenter import combine_segmenters
+
+    combine_segmenters([trained_segmenter, trained_segmenter], tmp_path / "two.pt")
+    cfg = segmenter.SegmenterTrainConfig(
+        data=train_dataset, out=tmp_path / "more.pt", steps=1, batch=2, pool=4, val_photos=2, init=tmp_path / "two.pt"
+    )
+    with pytest.raises(AffnerfError, match="two.pt: an ensemble of 2 segmenters"):
+        segmenter.train_segmenter(cfg)
+    assert not cfg.out.exists()

@@ -137,6 +137,25 @@ class SalientSegmenter(nn.Module):
 Segmenter = ObjectSegmenter | SalientSegmenter
 
 
+class SegmenterEnsemble(nn.Module):
+    """Several trained segmenters that vote: the object probability of a photo is the mean of its members'
+    (:func:`object_probability`), each member seeing the photo at its own ``input_side`` (a deep ensemble over
+    networks and scales). Members trained apart go wrong on different photos, so where one loses the object the
+    other often holds it (``benchmarks/results/segmenter_u2netp.md``, "Two segmenters voting"). For prediction
+    only: training starts from a single network.
+    """
+
+    def __init__(self, members: list[Segmenter]):
+        super().__init__()
+        if not members:
+            raise ValueError("a segmenter ensemble needs at least one member")
+        self.members = nn.ModuleList(members)
+
+
+#: What separates photos: one network or an ensemble of them.
+AnySegmenter = Segmenter | SegmenterEnsemble
+
+
 def build_segmenter(config: SegmenterConfig) -> Segmenter:
     """A new segmenter of ``config``'s kind, random weights."""
     return SalientSegmenter(config) if config.kind == "u2netp" else ObjectSegmenter(config)
@@ -176,8 +195,11 @@ def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tenso
 
 
 @torch.no_grad()
-def object_probability(model: Segmenter, rgb: np.ndarray) -> np.ndarray:
-    """(H, W) float32 probability that each pixel of the (H, W, 3) uint8 photo is the object."""
+def object_probability(model: AnySegmenter, rgb: np.ndarray) -> np.ndarray:
+    """(H, W) float32 probability that each pixel of the (H, W, 3) uint8 photo is the object (an ensemble's: the
+    mean of its members')."""
+    if isinstance(model, SegmenterEnsemble):
+        return np.mean([object_probability(m, rgb) for m in model.members], axis=0).astype(np.float32)
     x, (w, h) = network_input(rgb, model.config)
     logits = model(x)[0, 0, :h, :w]
     prob = torch.sigmoid(logits).numpy().astype(np.float32)
@@ -229,34 +251,67 @@ def probability_mask(
     return np.isin(labels, index[keep])
 
 
-def save_segmenter(model: Segmenter, path: Path, provenance: dict | None = None) -> None:
-    """Write the network's weights, its config and ``provenance`` (how it was trained) to ``path``."""
+def _network_record(model: Segmenter) -> dict:
+    """A network's config and a copy of its weights, as a segmenter file stores them."""
+    return {"config": asdict(model.config), "state": {k: v.detach().clone() for k, v in model.state_dict().items()}}
+
+
+def _network_from(record: dict) -> Segmenter:
+    """The network of a :func:`_network_record`, in eval mode."""
+    model = build_segmenter(SegmenterConfig(**record["config"]))
+    model.load_state_dict(record["state"])
+    return model.eval()
+
+
+def save_segmenter(model: AnySegmenter, path: Path, provenance: dict | None = None) -> None:
+    """Write the network's weights and config (an ensemble's: each member's, under ``members``) and
+    ``provenance`` (how it was trained) to ``path``."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
-    state = {k: v.detach().clone() for k, v in model.state_dict().items()}
-    torch.save({"config": asdict(model.config), "state": state, "provenance": provenance or {}}, tmp)
+    if isinstance(model, SegmenterEnsemble):
+        data = {"members": [_network_record(m) for m in model.members]}
+    else:
+        data = _network_record(model)
+    torch.save({**data, "provenance": provenance or {}}, tmp)
     tmp.replace(path)
 
 
-def read_segmenter(path: Path) -> Segmenter:
-    """A new segmenter with the weights in ``path``, in eval mode (not cached: safe to train further).
+def read_segmenter(path: Path) -> AnySegmenter:
+    """A new segmenter (or ensemble) with the weights in ``path``, in eval mode (not cached: safe to train
+    further).
 
     Raises:
         AffnerfError: the file is missing or not a segmenter.
     """
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
-        model = build_segmenter(SegmenterConfig(**data["config"]))
-        model.load_state_dict(data["state"])
+        if "members" in data:
+            return SegmenterEnsemble([_network_from(member) for member in data["members"]]).eval()
+        return _network_from(data)
     except (OSError, RuntimeError, KeyError, TypeError, ValueError, EOFError, pickle.UnpicklingError) as err:
         raise input_error(path, f"not an affnerf object segmenter ({err})") from err
-    return model.eval()
 
 
-_LOADED: dict[Path, Segmenter] = {}
+def combine_segmenters(paths: list[Path], out: Path, provenance: dict | None = None) -> SegmenterEnsemble:
+    """Write to ``out`` the ensemble of the segmenters in ``paths`` (an ensemble among them joins with its
+    members), each keeping its own network shape and input side; ``provenance`` is stored with it.
+
+    Raises:
+        AffnerfError: one of the files is missing or not a segmenter.
+    """
+    members: list[Segmenter] = []
+    for path in paths:
+        model = read_segmenter(Path(path))
+        members += list(model.members) if isinstance(model, SegmenterEnsemble) else [model]
+    ensemble = SegmenterEnsemble(members).eval()
+    save_segmenter(ensemble, Path(out), provenance)
+    return ensemble
 
 
-def load_segmenter(path: Path) -> Segmenter:
+_LOADED: dict[Path, AnySegmenter] = {}
+
+
+def load_segmenter(path: Path) -> AnySegmenter:
     """The segmenter in ``path``, in eval mode, loaded once per process and file.
 
     Raises:

@@ -29,6 +29,7 @@ from affnerf.model.segmenter import (
     SalientSegmenter,
     Segmenter,
     SegmenterConfig,
+    SegmenterEnsemble,
     build_segmenter,
     object_probability,
     read_segmenter,
@@ -166,7 +167,13 @@ def augment_batch(
 def initial_segmenter(cfg: SegmenterTrainConfig) -> Segmenter:
     """The network training starts from: ``cfg.init``'s, the salient model's (``init_salient``) or a new one."""
     if cfg.init is not None:
-        return read_segmenter(Path(cfg.init))
+        model = read_segmenter(Path(cfg.init))
+        if isinstance(model, SegmenterEnsemble):
+            raise AffnerfError(
+                f"{cfg.init}: an ensemble of {len(model.members)} segmenters; --init takes one network: save one of "
+                "its members (read_segmenter(FILE).members[k], save_segmenter) and start from that"
+            )
+        return model
     if not cfg.init_salient:
         return build_segmenter(cfg.network)
     return salient_segmenter(cfg.network)
