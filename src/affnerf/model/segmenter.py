@@ -3,8 +3,9 @@
 A generic salient-object model marks what stands out, which in a cluttered photo is often something else (a cup,
 a face, a cat). This network is trained (:mod:`affnerf.train.segmenter`, ``affnerf train-segmenter``) on a dataset's
 own object families pasted onto photographs and synthetic clutter, so it looks for *those* objects, as a detector
-trained on its classes does. It is pure PyTorch and runs in a fraction of a second on a CPU. One ships with affnerf
-(``kind="u2netp"``, :func:`affnerf.predict.shipped.shipped_segmenter`; ``benchmarks/results/segmenter_u2netp.md``).
+trained on its classes does. It is pure PyTorch and runs in a fraction of a second on a CPU. Two ship with affnerf,
+voting as one :class:`SegmenterEnsemble` (``kind="u2netp"``, :func:`affnerf.predict.shipped.shipped_segmenter`;
+``benchmarks/results/segmenter_u2netp.md``).
 
 Network: an encoder of ``levels`` stages (two 3×3 conv + batch norm + ReLU, then 2× max pooling, channels doubling
 from ``base``), a bottleneck that adds the image's mean feature to every cell (global context: which blob is the

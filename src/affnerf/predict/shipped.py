@@ -1,8 +1,8 @@
 """The models shipped with affnerf (``MODEL_CARD.md`` says how they were trained), and how a run becomes one.
 
 Two files ship in :mod:`affnerf.weights`: the AFF-NeRF model (``affnerf-small.pt``) and the object segmenter that
-``predict --segment auto`` separates cluttered photos with (``segmenter-u2netp.pt``: U²-Net-p fine-tuned on the
-procedural families, :mod:`affnerf.model.segmenter`).
+``predict --segment auto`` separates cluttered photos with (``segmenter-u2netp.pt``: two U²-Net-p networks fine-tuned
+on the procedural families, voting; :mod:`affnerf.model.segmenter`).
 
 ``python -m affnerf.predict.shipped RUN OUT.pt`` writes RUN's last checkpoint without its optimiser and random
 states (what prediction needs, about a third of the size); the shipped model was made this way.
