@@ -16,9 +16,9 @@ from affnerf.train import segmenter
 def test_loss_is_low_for_the_right_mask_and_high_for_the_wrong_one():
     mask = torch.zeros(2, 1, 16, 16)
     mask[:, :, 4:12, 4:12] = 1.0
-    right = segmenter.segmentation_loss((mask - 0.5) * 20, mask)
-    wrong = segmenter.segmentation_loss((0.5 - mask) * 20, mask)
-    assert right < 0.05 and wrong > 5.0
+    right = segmenter.photo_losses((mask - 0.5) * 20, mask)
+    wrong = segmenter.photo_losses((0.5 - mask) * 20, mask)
+    assert (right < 0.05).all() and (wrong > 5.0).all()
 
 
 def test_augment_flips_image_and_mask_together():
@@ -87,13 +87,14 @@ def test_subjects_are_the_salient_things_cut_out_of_the_photos():
         assert cut.mask.mean() > 0.5 and (cut.rgb[cut.mask][:, 0] > cut.rgb[cut.mask][:, 1] + 80).mean() > 0.9
 
 
-def test_the_step_loss_is_the_mean_of_each_photos_loss():
+def test_each_photos_loss_is_its_own_cross_entropy_and_dice():
     g = torch.Generator().manual_seed(0)
     logits, masks = torch.randn(4, 1, 8, 8, generator=g), (torch.rand(4, 1, 8, 8, generator=g) > 0.5).float()
     per = segmenter.photo_losses(logits, masks)
     assert per.shape == (4,)
-    assert segmenter.segmentation_loss(logits, masks) == pytest.approx(float(per.mean()), rel=1e-6)
-    assert per[0] == pytest.approx(float(segmenter.segmentation_loss(logits[:1], masks[:1])), rel=1e-6)
+    assert per[2] == pytest.approx(float(segmenter.photo_losses(logits[2:3], masks[2:3])[0]), rel=1e-6)
+    bce = torch.nn.functional.binary_cross_entropy_with_logits(logits, masks)  # the whole batch's pixels
+    assert float(segmenter.pixel_bce(logits, masks).mean()) == pytest.approx(float(bce), rel=1e-6)
 
 
 def test_hard_draws_follow_the_last_losses_and_no_hard_share_draws_uniformly():

@@ -207,12 +207,6 @@ def photo_losses(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
     return pixel_bce(logits, masks) + dice
 
 
-def segmentation_loss(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """The batch mean of :func:`photo_losses` (all photos of a batch have the same size, so the cross-entropy term
-    is the mean over every pixel of the batch)."""
-    return photo_losses(logits, masks).mean()
-
-
 def step_losses(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
     """(N,) training loss of each photo of a batch: :func:`photo_losses` of the output, and for U²-Net-p also the
     mean binary cross-entropy of its six side outputs (its deep supervision)."""
@@ -221,11 +215,6 @@ def step_losses(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> 
     fused, sides = model.side_logits(images)
     side_bce = torch.stack([pixel_bce(s.float(), masks) for s in sides]).mean(dim=0)
     return photo_losses(fused.float(), masks) + side_bce
-
-
-def step_loss(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """The training loss of one batch: the mean of :func:`step_losses`."""
-    return step_losses(model, images, masks).mean()
 
 
 def draw_batch(last_loss: torch.Tensor, batch: int, hard_share: float, g: torch.Generator) -> torch.Tensor:
@@ -302,7 +291,7 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
         x, m = augment_batch(train[0][pick], train[1][pick], cfg.jitter, g)
         with forward_precision(cfg.precision, x.device):
             losses = step_losses(model, x, m)
-        loss = losses.mean()
+        loss = losses.mean()  # photos of a batch have one size: the cross-entropy is the mean over all its pixels
         last_loss[pick] = losses.detach().float()
         opt.zero_grad(set_to_none=True)
         loss.backward()
