@@ -61,7 +61,7 @@ class PredictConfig:
             ``shipped`` for the one shipped with affnerf (U²-Net-p fine-tuned on the procedural families).
         box: X0 Y0 X1 Y1, the rectangle of the photo the object lies in (pixels from the top-left corner, X1 and
             Y1 exclusive), as a detector or a drawn box gives it: ``segment`` runs inside it only, and everything
-            outside is background (``auto``: the object segmenter's mask cut to the box when it is at least 85 %
+            outside is background (``auto``: the object segmenter's mask cut to the box when it is at least 80 %
             sure, else GrabCut from the box; the surest separation on a cluttered photo).
             ``mask`` (or, for ``auto``, the image's alpha) still comes first.
         views: turntable views.
