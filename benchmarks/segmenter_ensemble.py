@@ -34,7 +34,7 @@ def seed_scores(data: Path, seed: int, count: int, members: dict[str, segnet.Any
     moved = []
     for c in bench_composites(data, seed, count):
         maps = {name: segnet.object_probability(model, c.rgb) for name, model in members.items()}
-        maps["ensemble"] = np.mean(list(maps.values()), axis=0).astype(np.float32)
+        maps["ensemble"] = segnet.vote(list(maps.values()))  # as the ensemble's own map, from maps made once
         row = {name: round(mask_iou(segnet.probability_mask(p), c.truth), 4) for name, p in maps.items()}
         for name, value in row.items():
             ious[name].append(value)

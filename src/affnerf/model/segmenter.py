@@ -195,12 +195,22 @@ def network_input(rgb: np.ndarray, config: SegmenterConfig) -> tuple[torch.Tenso
     return torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None], size
 
 
+def vote(probabilities: list[np.ndarray]) -> np.ndarray:
+    """(H, W) float32 object probability of an ensemble: the mean of its members' (H, W) probabilities.
+
+    Example:
+        >>> [round(float(p), 2) for p in vote([np.full((1, 2), 0.9), np.full((1, 2), 0.3)]).ravel()]
+        [0.6, 0.6]
+    """
+    return np.mean(probabilities, axis=0).astype(np.float32)
+
+
 @torch.no_grad()
 def object_probability(model: AnySegmenter, rgb: np.ndarray) -> np.ndarray:
     """(H, W) float32 probability that each pixel of the (H, W, 3) uint8 photo is the object (an ensemble's: the
     mean of its members')."""
     if isinstance(model, SegmenterEnsemble):
-        return np.mean([object_probability(m, rgb) for m in model.members], axis=0).astype(np.float32)
+        return vote([object_probability(m, rgb) for m in model.members])
     x, (w, h) = network_input(rgb, model.config)
     logits = model(x)[0, 0, :h, :w]
     prob = torch.sigmoid(logits).numpy().astype(np.float32)

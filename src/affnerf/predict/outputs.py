@@ -58,7 +58,8 @@ class PredictConfig:
             used is written as ``mask.png``.
         segmenter: the object segmenter of ``segment`` ``segmenter`` and ``auto`` (tried before the salient model):
             a file from ``affnerf train-segmenter`` (your own object families), ``none`` to leave it out, or
-            ``shipped`` for the one shipped with affnerf (U²-Net-p fine-tuned on the procedural families).
+            ``shipped`` for the one shipped with affnerf (two U²-Net-p networks fine-tuned on the procedural
+            families, voting).
         box: X0 Y0 X1 Y1, the rectangle of the photo the object lies in (pixels from the top-left corner, X1 and
             Y1 exclusive), as a detector or a drawn box gives it: ``segment`` runs inside it only, and everything
             outside is background (``auto``: the object segmenter's mask cut to the box when it is at least 80 %
