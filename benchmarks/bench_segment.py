@@ -38,7 +38,7 @@ from PIL import Image
 from affnerf.data.dataset import ObjectData
 from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
-from affnerf.predict import salient, segment
+from affnerf.predict import grabcut, salient, segment
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import (  # noqa: E402
@@ -89,7 +89,7 @@ def measure_map(
     mask, more = timed(mask_of, prob)
     secs[name] += more
     iou[name] = segment.mask_iou(mask, truth)
-    refined, secs[f"{name}+grabcut refine"] = timed(segment.refine_with_grabcut, rgb, mask)
+    refined, secs[f"{name}+grabcut refine"] = timed(grabcut.refine_with_grabcut, rgb, mask)
     secs[f"{name}+grabcut refine"] += secs[name]
     iou[f"{name}+grabcut refine"] = segment.mask_iou(refined, truth)
     return prob, mask, sweep
@@ -119,8 +119,8 @@ def measure_one(rgb: np.ndarray, truth: np.ndarray, model, segmenter: Path) -> t
     iou, secs = {}, {}
     mask, secs["uniform"] = timed(segment.uniform_background_mask, rgb)
     iou["uniform"] = segment.mask_iou(mask, truth)
-    grabcut, secs["grabcut"] = timed(segment.grabcut_mask, rgb)
-    iou["grabcut"] = segment.mask_iou(grabcut, truth)
+    rectangle, secs["grabcut"] = timed(grabcut.grabcut_mask, rgb)
+    iou["grabcut"] = segment.mask_iou(rectangle, truth)
     _, salient_only, sweep = measure_map(rgb, truth, "salient", model.saliency, salient.SALIENT_THRESHOLD, iou, secs)
     seg, secs["auto"] = timed(segment.segment, rgb, "auto", "composite", segmenter)
     iou["auto"] = segment.mask_iou(seg.mask, truth)
@@ -130,7 +130,7 @@ def measure_one(rgb: np.ndarray, truth: np.ndarray, model, segmenter: Path) -> t
         "auto_source": seg.source,
         "auto_agreement": old.agreement,
         "border_uniformity": segment.background_uniformity(rgb),
-        "agreement_salient_grabcut": segment.mask_iou(salient_only, grabcut),
+        "agreement_salient_grabcut": segment.mask_iou(salient_only, rectangle),
     }
     return iou, secs, {"sweep": sweep, **extra}
 

@@ -37,7 +37,7 @@ from affnerf.data import composite as synth
 from affnerf.data.crop import crop_object, object_bbox
 from affnerf.data.dataset import Dataset
 from affnerf.environment import describe_machine
-from affnerf.predict import salient, segment
+from affnerf.predict import grabcut, salient, segment
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
@@ -65,7 +65,7 @@ def candidates(rgb: np.ndarray, prob: np.ndarray) -> list[np.ndarray]:
             box = (int(x0 - 0.1 * bw), int(y0 - 0.1 * bh), int(x1 + 0.1 * bw), int(y1 + 0.1 * bh))
             if min(box[2] - box[0], box[3] - box[1]) >= segment.MIN_BOX_SIDE:
                 add(segment.segment(rgb, "auto", "composite", None, box).mask)
-    add(segment.grabcut_mask(rgb))
+    add(grabcut.grabcut_mask(rgb))
     return out
 
 

@@ -106,3 +106,18 @@ def salient_weights(*modules: str) -> Path | None:
     except (AffnerfError, ImportError):
         return None
     return path
+
+
+def disc_with_a_thin_bar(h=240, w=320, seed=0):
+    """A red disc with a bar 4 pixels wide sticking out of it, on grey textured clutter: (rgb, disc, bar)."""
+    import numpy as np
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    noise = ndimage.gaussian_filter(rng.normal(size=(h, w, 3)), (3, 3, 0))
+    bg = 120 + 50 * noise / noise.std()
+    yy, xx = np.mgrid[:h, :w]
+    disc = ((yy - 120) / 50.0) ** 2 + ((xx - 200) / 50.0) ** 2 <= 1.0
+    bar = (abs(yy - 120) < 2) & (xx > 40) & (xx < 160)
+    rgb = np.where((disc | bar)[..., None], np.array([210, 40, 30]), bg)
+    return np.clip(rgb, 0, 255).astype(np.uint8), disc, bar

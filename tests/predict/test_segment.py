@@ -8,9 +8,10 @@ import sys
 import numpy as np
 import pytest
 from scipy import ndimage
+from support import disc_with_a_thin_bar
 
 from affnerf.errors import AffnerfError
-from affnerf.predict import salient, segment
+from affnerf.predict import grabcut, salient, segment
 
 
 def _composite(h=240, w=320, seed=0):
@@ -31,14 +32,14 @@ def _has_extra() -> bool:
         salient.load_salient_model()
     except AffnerfError:
         return False
-    return segment.opencv() is not None
+    return grabcut.opencv() is not None
 
 
 needs_extra = pytest.mark.skipif(
     not _has_extra(), reason="the optional extra affnerf[segment] (onnxruntime, U2-Net-p weights, OpenCV) is not "
     "installed: make install installs it"
 )  # fmt: skip
-needs_opencv = pytest.mark.skipif(segment.opencv() is None, reason="opencv-python-headless is not installed")
+needs_opencv = pytest.mark.skipif(grabcut.opencv() is None, reason="opencv-python-headless is not installed")
 
 
 @pytest.fixture
@@ -107,14 +108,11 @@ def test_salient_without_the_model_is_an_error_naming_the_extra(no_salient_model
         segment.segment(_composite()[0], "salient")
 
 
-def test_largest_component_and_trimap():
+def test_largest_component_keeps_the_biggest_region():
     mask = np.zeros((40, 40), bool)
     mask[5:25, 5:25] = mask[30:33, 30:33] = True
     big = segment.largest_component(mask)
     assert big.sum() == 400 and not big[30:33, 30:33].any()
-    labels = segment.trimap(big)
-    assert labels[15, 15] == 1 and labels[0, 39] == 0  # sure object inside, sure background far away
-    assert set(np.unique(labels[5, 4:7])) == {2, 3}  # unsure on both sides of the edge
 
 
 class _WrongModel:
@@ -134,21 +132,6 @@ def test_when_the_salient_model_and_grabcut_disagree_auto_takes_grabcut_and_reco
     swapped = segment.salient_segmentation(rgb, model=_WrongModel(), use_grabcut_on_disagreement=True)
     assert swapped.source == "grabcut" and swapped.compared_with == "salient" and swapped.agreement == kept.agreement
     assert segment.mask_iou(swapped.mask, truth) > 0.8
-
-
-@needs_opencv
-def test_grabcut_gives_the_same_mask_whatever_opencvs_random_state():
-    """GrabCut's colour models start from k-means++ on OpenCV's process-wide generator: without seeding it, a photo's
-    mask depended on the GrabCuts run before it (here 3 pixels of this photo differ between two states)."""
-    import cv2
-    import skimage.data
-
-    photo = np.ascontiguousarray(skimage.data.coffee()[::4, ::4])
-    masks = []
-    for state in (1, 2, 3):
-        cv2.setRNGSeed(state)  # what earlier GrabCuts would have left behind
-        masks.append(segment.grabcut_mask(photo))
-    assert masks[0].any() and all((m == masks[0]).all() for m in masks[1:])
 
 
 def _training_object_on_coffee(dataset, seed: int = 0):
@@ -274,13 +257,6 @@ def test_a_box_too_small_to_hold_an_object_is_an_error_naming_the_image_and_its_
 
 
 @needs_opencv
-def test_grabcut_on_an_image_too_small_for_its_rectangle_finds_nothing_instead_of_failing():
-    rgb = (np.random.default_rng(0).random((40, 2, 3)) * 255).astype(np.uint8)
-    assert not segment.grabcut_mask(rgb).any()
-    assert segment.grabcut_mask(np.pad(rgb, ((0, 0), (0, 1), (0, 0)))).shape == (40, 3)
-
-
-@needs_opencv
 def test_a_tight_box_keeps_the_whole_object_and_a_box_of_the_whole_image_still_separates():
     rgb, truth = _two_objects()
     rows, cols = np.flatnonzero(truth.any(1)), np.flatnonzero(truth.any(0))
@@ -300,3 +276,17 @@ def test_the_predict_help_states_the_box_rules_confidence():
     stated = f"at least {round(100 * segment.BOX_SEGMENTER_CONFIDENCE)} %"
     doc = " ".join(PredictConfig.__doc__.split())
     assert stated in doc, "PredictConfig.box's doc must state the box rule's threshold"
+
+
+@needs_opencv
+def test_the_segmenters_mask_is_redrawn_from_its_probabilities_and_kept_inside_a_box(monkeypatch):
+    rgb, disc, bar = disc_with_a_thin_bar()
+    prob = np.where(disc, 0.97, np.where(bar, 0.3, 0.02)).astype(np.float32)  # the bar: seen, not believed
+    monkeypatch.setattr(segment, "object_probability", lambda model, image: prob)
+    far_bar = bar & (np.arange(rgb.shape[1]) < 120)[None, :]  # the bar's part outside the disc
+    seg = segment.segmenter_segmentation(rgb, model=None)
+    assert seg.mask[far_bar].mean() > 0.9 and seg.confidence == pytest.approx(0.97)  # the network's own confidence
+    boxed = segment.segmenter_segmentation(rgb, model=None, box=(100, 0, 320, 240))
+    assert not boxed.mask[:, :100].any() and boxed.mask[bar & (np.arange(320) >= 100)].mean() > 0.9
+    monkeypatch.setattr(segment, "REFINE_SEGMENTER", False)
+    assert not segment.segmenter_segmentation(rgb, model=None).mask[far_bar].any()
