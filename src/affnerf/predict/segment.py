@@ -4,8 +4,8 @@
 - ``grabcut``: OpenCV's GrabCut, started from a centred rectangle (the object is assumed inside it).
 - ``segmenter``: an object segmenter (:mod:`affnerf.model.segmenter`): the one that ships with affnerf (U²-Net-p
   fine-tuned to find the procedural families among clutter, :func:`affnerf.predict.shipped.shipped_segmenter`),
-  or one trained on your own object families with ``affnerf train-segmenter`` and given as a file; largest
-  connected component. Its confidence is the mean probability it gives the pixels of its own mask; below
+  or one trained on your own object families with ``affnerf train-segmenter`` and given as a file; its main
+  region, redrawn by GrabCut from the network's probabilities when OpenCV is there. Its confidence is the mean probability it gives the pixels of its own mask; below
   :data:`MIN_SEGMENTER_CONFIDENCE` the separation is doubtful.
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
 - ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
@@ -65,12 +65,12 @@ AUTO_UNIFORMITY = 0.97
 BOX_MARGIN = 0.02
 #: Smallest confidence of the object segmenter's mask cut to a ``--box`` for ``auto`` to take it instead of
 #: GrabCut in the box. Chosen on composites of another seed than the benchmark's (``segment_box_rule.py --seed
-#: 1``) for the shipped two-network ensemble, whose averaged maps are less sure than one network's: 0.7, 0.75,
-#: 0.8, 0.85 and 0.9 gave a mean mask IoU of 0.892, 0.887, 0.909, 0.905 and 0.901 in boxes 5-25 % larger than the
-#: object per side (GrabCut alone 0.871, the segmenter's mask alone 0.876), and 0.902, 0.906, 0.930, 0.909, 0.909
-#: in boxes 0-5 % larger (0.881, 0.878); on seed 0, 0.8 gives 0.873 and 0.883. (The single network shipped before
-#: chose 0.85.) Run on the box as on a photo of its own, the segmenter was worse than GrabCut (0.54 and 0.19): it
-#: sees objects at the size they have in a photo.
+#: 1``) for the shipped two-network ensemble, its mask redrawn by GrabCut from its probabilities: 0.7, 0.75, 0.8,
+#: 0.85 and 0.9 gave a mean mask IoU of 0.911, 0.902, 0.921, 0.909 and 0.903 in boxes 5-25 % larger than the
+#: object per side (GrabCut alone 0.871, the segmenter's mask alone 0.899), and 0.919, 0.919, 0.941, 0.915 and
+#: 0.911 in boxes 0-5 % larger (0.881, 0.899); without the redrawing 0.8 was the best too (0.909 and 0.930). (The
+#: single network shipped before chose 0.85.) Run on the box as on a photo of its own, the segmenter was worse than
+#: GrabCut (0.54 and 0.19): it sees objects at the size they have in a photo.
 BOX_SEGMENTER_CONFIDENCE = 0.8
 #: Smallest side in pixels of a ``--box`` (after clipping to the image): a narrower one cannot hold an object and
 #: its background (GrabCut needs pixels of both; one 2 pixels wide crashed OpenCV before this check).
@@ -82,11 +82,11 @@ MIN_AGREEMENT = 0.8
 #: Whether ``auto`` and ``salient`` redraw the salient mask's edges with GrabCut from its trimap: on the composite
 #: benchmark it raised the mean mask IoU from 0.483 to 0.490 (better in most composites) for about 0.25 s an image.
 REFINE_SALIENT = True
-#: Whether the object segmenter's mask (without a box) is redrawn by GrabCut from the network's probabilities
+#: Whether the object segmenter's mask is redrawn by GrabCut from the network's probabilities
 #: (:func:`affnerf.predict.grabcut.probability_trimap`). On the composite benchmark's 240 composites of seeds 0-4
-#: it raised the mean mask IoU of ``auto`` from 0.847 to 0.867 (gains on every seed, most on scissors and
-#: eyeglasses) for about 0.12 s an image (``benchmarks/results/segmenter_u2netp.md``, "GrabCut guided by the
-#: segmenter's probabilities"). GrabCut from the mask's plain trimap had moved it by +0.006 to +0.015.
+#: it raised the mean mask IoU of the shipped segmenter's mask from 0.847 to 0.869 (gains on every seed, most on
+#: eyeglasses and scissors) for about 0.27 s an image (``benchmarks/results/segmenter_u2netp.md``, "GrabCut guided
+#: by the segmenter's probabilities"); GrabCut from the mask's plain trimap gave 0.852.
 REFINE_SEGMENTER = True
 #: Smallest mean probability of the segmenter over its own mask for a confident separation.
 MIN_SEGMENTER_CONFIDENCE = 0.8
