@@ -17,7 +17,7 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     The object is separated from its background (--mask, else --segment: by default the image's alpha, else a
     uniform background when the border is of one colour, else the object segmenter that ships with affnerf (or one
     trained with `affnerf train-segmenter` on your object families, --segmenter FILE; --segmenter none leaves it
-    out), else the salient-object model of the optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that
+    out; its mask redrawn by GrabCut from its probabilities when OpenCV is installed), else the salient-object model of the optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that
     rectangle only: for auto the segmenter's mask cut to it when it is sure, else GrabCut),
     cropped, centred and resized the way training saw objects, and encoded. Unless
     --fit-steps is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is
