@@ -7,8 +7,8 @@ model, ``--segment auto``). Each row of the picture shows the photo | ``DIR/mask
 ``DIR/turntable/000.png`` (the predicted object's front view: RGB | affordance overlay), with how predict
 separated the object and the mask's IoU against the true mask. The default rows are composite 6 (a screwdriver
 on the astronaut photograph: the shipped segmenter finds the thin tool on a photo with its own subject, where the
-salient model and GrabCut took the astronaut) and composite 0 (thin scissors on the same photograph, where it
-still fails: the common failure), then composite 0
+salient model and GrabCut took the astronaut) and composite 0 (thin scissors on the same photograph, the common
+failure of the networks alone, which GrabCut redraws from their probabilities, with a warning), then composite 0
 again with ``--box`` (``--boxed 0``: the box ``bench_segment.py`` drew for it, the true bounding box loosened by
 5-25 % per side; drawn on the photo).
 
