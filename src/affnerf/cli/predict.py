@@ -17,16 +17,16 @@ def predict(config: Annotated[PredictConfig, tyro.conf.arg(name="")]) -> None:
     The object is separated from its background (--mask, else --segment: by default the image's alpha, else a
     uniform background when the border is of one colour, else the object segmenter that ships with affnerf (or one
     trained with `affnerf train-segmenter` on your object families, --segmenter FILE; --segmenter none leaves it
-    out; its mask redrawn by GrabCut from its probabilities when OpenCV is installed), else the salient-object model of the optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that
-    rectangle only: for auto the segmenter's mask cut to it when it is sure, else GrabCut),
-    cropped, centred and resized the way training saw objects, and encoded. Unless
-    --fit-steps is 0, the encoder's codes are then fitted to the photo (test-time inversion: the photo's camera is
-    searched, assuming a --fov degree lens, and the codes are moved so the model renders the photo; a few seconds on
-    a CPU). Writes OUT/input.png, OUT/mask.png (the mask used: fix it and pass it back with --mask), OUT/fit.png
-    (after a fit: the crop | the fitted model at the camera found | its affordance), OUT/turntable/*.png and
-    OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply (vertex colours and an integer vertex
-    property `affordance`), OUT/affordance_model.glb and OUT/prediction.json. Without --run, the model shipped with
-    affnerf is used.
+    out; its mask redrawn by GrabCut from its probabilities when OpenCV is installed), else the salient-object model
+    of the optional extra affnerf[segment]; with --box X0 Y0 X1 Y1, inside that rectangle only: for auto the
+    segmenter's mask cut to it when it is sure, else GrabCut), cropped, centred and resized the way training saw
+    objects, and encoded. Unless --fit-steps is 0, the encoder's codes are then fitted to the photo (test-time
+    inversion: the photo's camera is searched, assuming a --fov degree lens, and the codes are moved so the model
+    renders the photo; a few seconds on a CPU). Writes OUT/input.png, OUT/mask.png (the mask used: fix it and pass
+    it back with --mask), OUT/fit.png (after a fit: the crop | the fitted model at the camera found | its
+    affordance), OUT/turntable/*.png and OUT/turntable.gif (RGB | affordance overlay), OUT/affordance_model.ply
+    (vertex colours and an integer vertex property `affordance`), OUT/affordance_model.glb and OUT/prediction.json.
+    Without --run, the model shipped with affnerf is used.
 
     Warnings (one line each on stderr; the outputs are written): the object could not be separated with confidence
     (no uniform background, it fills the frame or runs along its border, the segmenter is unsure of its mask, or two

@@ -5,8 +5,9 @@
 - ``segmenter``: an object segmenter (:mod:`affnerf.model.segmenter`): the one that ships with affnerf (U²-Net-p
   fine-tuned to find the procedural families among clutter, :func:`affnerf.predict.shipped.shipped_segmenter`),
   or one trained on your own object families with ``affnerf train-segmenter`` and given as a file; its main
-  region, redrawn by GrabCut from the network's probabilities when OpenCV is there. Its confidence is the mean probability it gives the pixels of its own mask; below
-  :data:`MIN_SEGMENTER_CONFIDENCE` the separation is doubtful.
+  region, redrawn by GrabCut from the network's probabilities when OpenCV is there. Its confidence is the mean
+  probability it gives the pixels of its own mask; below :data:`MIN_SEGMENTER_CONFIDENCE` the separation is
+  doubtful.
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
 - ``auto`` (the default): a uniform background when the border is of one colour (:data:`AUTO_UNIFORMITY`), else
   the object segmenter (the given file, else the shipped one) when it finds something, else the salient model;
