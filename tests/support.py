@@ -7,7 +7,9 @@ import importlib
 from dataclasses import fields
 from pathlib import Path
 
+import numpy as np
 import torch
+from scipy import ndimage
 
 from affnerf.errors import AffnerfError
 from affnerf.model.config import ModelConfig
@@ -110,9 +112,6 @@ def salient_weights(*modules: str) -> Path | None:
 
 def disc_with_a_thin_bar(h=240, w=320, seed=0):
     """A red disc with a bar 4 pixels wide sticking out of it, on grey textured clutter: (rgb, disc, bar)."""
-    import numpy as np
-    from scipy import ndimage
-
     rng = np.random.default_rng(seed)
     noise = ndimage.gaussian_filter(rng.normal(size=(h, w, 3)), (3, 3, 0))
     bg = 120 + 50 * noise / noise.std()

@@ -288,5 +288,7 @@ def test_the_segmenters_mask_is_redrawn_from_its_probabilities_and_kept_inside_a
     assert seg.mask[far_bar].mean() > 0.9 and seg.confidence == pytest.approx(0.97)  # the network's own confidence
     boxed = segment.segmenter_segmentation(rgb, model=None, box=(100, 0, 320, 240))
     assert not boxed.mask[:, :100].any() and boxed.mask[bar & (np.arange(320) >= 100)].mean() > 0.9
+    unsure = segment.segmenter_segmentation(rgb, model=None, redraw_from=0.99)  # a caller that drops it: no GrabCut
+    assert not unsure.mask[far_bar].any() and unsure.confidence == seg.confidence
     monkeypatch.setattr(segment, "REFINE_SEGMENTER", False)
     assert not segment.segmenter_segmentation(rgb, model=None).mask[far_bar].any()

@@ -199,10 +199,11 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
     return Segmentation(mask, "salient", agreement, "grabcut")
 
 
-def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None) -> Segmentation:
+def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None, redraw_from: float = 0.0) -> Segmentation:
     """The object segmenter's mask (:func:`~affnerf.model.segmenter.probability_mask`; inside ``box`` only when one
     is given, the network still seeing the whole photo) and its confidence, the mean probability over that mask (0
-    when it is empty). With OpenCV, when :data:`REFINE_SEGMENTER`, GrabCut then redraws the mask from the network's
+    when it is empty). With OpenCV, when :data:`REFINE_SEGMENTER` and the confidence is at least ``redraw_from``
+    (a caller that drops less sure masks spares their GrabCut), GrabCut then redraws the mask from the network's
     probabilities (:func:`~affnerf.predict.grabcut.refine_with_grabcut`, inside the box); the confidence stays the
     network's."""
     prob = object_probability(model, rgb)
@@ -213,7 +214,7 @@ def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None) -> Se
         inside[y0:y1, x0:x1] = True
     mask = probability_mask(prob, inside)
     confidence = float(prob[mask].mean()) if mask.any() else 0.0
-    if REFINE_SEGMENTER and mask.any() and opencv() is not None:
+    if REFINE_SEGMENTER and mask.any() and confidence >= redraw_from and opencv() is not None:
         mask = refine_with_grabcut(rgb, mask, prob, inside)
     return Segmentation(mask, "segmenter", confidence=confidence, box=box)
 
@@ -279,7 +280,7 @@ def segment_in_box(
     cluttered = method == "auto" and background_uniformity(sub) < AUTO_UNIFORMITY
     found = resolve_segmenter(segmenter) if cluttered else None
     if found is not None:
-        seg = segmenter_segmentation(rgb, load_segmenter(found), clipped)
+        seg = segmenter_segmentation(rgb, load_segmenter(found), clipped, BOX_SEGMENTER_CONFIDENCE)
         if seg.confidence >= BOX_SEGMENTER_CONFIDENCE:
             return seg
     if cluttered and opencv() is not None:
