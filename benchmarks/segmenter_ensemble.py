@@ -9,7 +9,7 @@ a file that holds an ensemble counts as its members (named ``FILE#0``, ``FILE#1`
 Run (two networks, 2026-12-03; a third beside the shipped pair, 2026-12-03 third session)::
 
     .venv/bin/python benchmarks/segmenter_ensemble.py --data /tmp/seg/data --members STAGE3.pt STAGE4.pt \
-        --seeds 1 0 2 3 4 --out benchmarks/results/segmenter_ensemble.json
+        --seeds 1 0 2 3 4 --out benchmarks/results/segmenter_ensemble.json  # its vote was named "ensemble" then
     .venv/bin/python benchmarks/segmenter_ensemble.py --members SHIPPED.pt THIRD.pt --vote 0,1 --vote 0,1,2 \
         --vote 0,2 --vote 1,2 --redraw --out benchmarks/results/segmenter_ensemble3.json
 """
@@ -36,11 +36,8 @@ def read_members(paths: list[Path]) -> dict[str, segnet.Segmenter]:
     """The single networks in ``paths`` by name, an ensemble's members as ``FILE#i``."""
     members: dict[str, segnet.Segmenter] = {}
     for path in paths:
-        model = segnet.read_segmenter(path)
-        if isinstance(model, segnet.SegmenterEnsemble):
-            members.update({f"{path}#{i}": m for i, m in enumerate(model.members)})
-        else:
-            members[str(path)] = model
+        nets = segnet.networks(segnet.read_segmenter(path))
+        members.update({str(path): nets[0]} if len(nets) == 1 else {f"{path}#{i}": m for i, m in enumerate(nets)})
     return members
 
 

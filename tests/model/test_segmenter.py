@@ -116,6 +116,7 @@ def test_combined_segmenters_are_saved_and_read_back_as_one_ensemble(tmp_path):
     read = segnet.read_segmenter(tmp_path / "ab.pt")
     assert isinstance(read, segnet.SegmenterEnsemble) and [m.config for m in read.members] == [a.config, b.config]
     assert len(both.members) == 3 and torch.load(tmp_path / "ab.pt", weights_only=True)["provenance"] == {"note": "two"}
+    assert segnet.networks(a) == [a] and [m.config for m in segnet.networks(read)] == [a.config, b.config]
     photo = np.random.default_rng(3).integers(0, 255, (30, 40, 3), np.uint8)
     want = segnet.object_probability(segnet.SegmenterEnsemble([a, b]), photo)
     assert np.array_equal(segnet.object_probability(read, photo), want)

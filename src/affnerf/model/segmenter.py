@@ -303,6 +303,11 @@ def read_segmenter(path: Path) -> AnySegmenter:
         raise input_error(path, f"not an affnerf object segmenter ({err})") from err
 
 
+def networks(model: AnySegmenter) -> list[Segmenter]:
+    """The single networks of ``model``: an ensemble's members, or the network itself."""
+    return list(model.members) if isinstance(model, SegmenterEnsemble) else [model]
+
+
 def combine_segmenters(paths: list[Path], out: Path, provenance: dict | None = None) -> SegmenterEnsemble:
     """Write to ``out`` the ensemble of the segmenters in ``paths`` (an ensemble among them joins with its
     members), each keeping its own network shape and input side; ``provenance`` is stored with it.
@@ -312,8 +317,7 @@ def combine_segmenters(paths: list[Path], out: Path, provenance: dict | None = N
     """
     members: list[Segmenter] = []
     for path in paths:
-        model = read_segmenter(Path(path))
-        members += list(model.members) if isinstance(model, SegmenterEnsemble) else [model]
+        members += networks(read_segmenter(Path(path)))
     ensemble = SegmenterEnsemble(members).eval()
     save_segmenter(ensemble, Path(out), provenance)
     return ensemble
