@@ -102,7 +102,7 @@ def measure_segmenter(
     ``boxes``), its threshold sweep and its confidence."""
     iou, secs = {}, {}
     prob, mask, sweep = measure_map(
-        rgb, truth, "segmenter", lambda x: segnet.object_probability(segmenter, x), segnet.SEGMENTER_THRESHOLD, iou,
+        rgb, truth, "segmenter", lambda x: segnet.photo_probability(segmenter, x), segnet.SEGMENTER_THRESHOLD, iou,
         secs, segnet.probability_mask,
     )  # fmt: skip
     for name, box in boxes.items():
@@ -269,6 +269,7 @@ def settings(args: argparse.Namespace, composites: int) -> dict[str, Any]:
         "box_padding": BOX_PADDING,
         "tight_box_padding": TIGHT_PADDING,
         "box_margin": segment.BOX_MARGIN,
+        "segmenter_tile_share": segnet.SEGMENTER_TILE_SHARE,
     }
 
 

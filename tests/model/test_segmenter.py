@@ -57,6 +57,41 @@ def test_the_main_region_is_the_sure_object_not_a_larger_unsure_subject():
     assert segnet.probability_mask(prob)[:, :60].all() and not segnet.probability_mask(prob)[:, 60:].any()
 
 
+class NearTheBrightest(torch.nn.Module):
+    """A network that reads the whole image it is given: a pixel is object when it is bright (above 0.5) and within
+    0.1 of the brightest pixel's brightness (what a salient model does with context, in one line)."""
+
+    config = replace(TINY, input_side=60)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        grey = x.mean(dim=1, keepdim=True)
+        return 60.0 * torch.minimum(grey - grey.amax() + 0.1, grey - 0.5)
+
+
+def test_tile_windows_are_four_corners_covering_the_image():
+    for h, w in ((300, 400), (31, 17)):
+        cover = np.zeros((h, w), int)
+        for y0, y1, x0, x1 in segnet.tile_windows(h, w, 0.6):
+            assert y1 - y0 == round(0.6 * h) and x1 - x0 == round(0.6 * w)
+            cover[y0:y1, x0:x1] += 1
+        assert cover.min() >= 1 and cover[0, 0] == cover[-1, -1] == 1 and cover[h // 2, w // 2] == 4
+
+
+def test_a_small_object_beside_a_brighter_subject_is_found_on_a_tile():
+    photo = np.full((60, 80, 3), 50, np.uint8)
+    photo[2:22, 2:30] = 255  # the photo's own subject, top left
+    photo[48:54, 66:74] = 180  # a small object, bottom right: dimmer than the subject
+    model = NearTheBrightest()
+    whole = segnet.object_probability(model, photo)
+    assert whole[50, 70] < 0.1 and whole[10, 10] > 0.9  # the whole photo sees the subject only
+    tiles = segnet.tiled_probability(model, photo)
+    assert tiles[50, 70] > 0.9  # the bottom-right tile does not hold the subject: the object is its brightest
+    both = segnet.photo_probability(model, photo)
+    assert both[50, 70] > 0.9 and both[10, 10] > 0.9 and both[35, 40] < 0.1
+    assert np.array_equal(both, np.maximum(whole, tiles))
+    assert np.array_equal(segnet.photo_probability(model, photo, share=None), whole)
+
+
 def test_save_and_load_give_the_same_probabilities(tmp_path):
     torch.manual_seed(0)
     model = segnet.ObjectSegmenter(TINY).eval()

@@ -282,7 +282,7 @@ def test_the_predict_help_states_the_box_rules_confidence():
 def test_the_segmenters_mask_is_redrawn_from_its_probabilities_and_kept_inside_a_box(monkeypatch):
     rgb, disc, bar = disc_with_a_thin_bar()
     prob = np.where(disc, 0.97, np.where(bar, 0.3, 0.02)).astype(np.float32)  # the bar: seen, not believed
-    monkeypatch.setattr(segment, "object_probability", lambda model, image: prob)
+    monkeypatch.setattr(segment, "photo_probability", lambda model, image: prob)
     far_bar = bar & (np.arange(rgb.shape[1]) < 120)[None, :]  # the bar's part outside the disc
     seg = segment.segmenter_segmentation(rgb, model=None)
     assert seg.mask[far_bar].mean() > 0.9 and seg.confidence == pytest.approx(0.97)  # the network's own confidence

@@ -39,7 +39,7 @@ from scipy import ndimage
 
 from affnerf.data.composite import largest_component
 from affnerf.errors import AffnerfError
-from affnerf.model.segmenter import load_segmenter, object_probability, probability_mask
+from affnerf.model.segmenter import load_segmenter, photo_probability, probability_mask
 from affnerf.predict import shipped
 from affnerf.predict.grabcut import grabcut_mask, opencv, refine_with_grabcut
 from affnerf.predict.salient import SalientUnavailable, load_salient_model, salient_mask
@@ -200,13 +200,14 @@ def salient_segmentation(rgb: np.ndarray, model=None, use_grabcut_on_disagreemen
 
 
 def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None, redraw_from: float = 0.0) -> Segmentation:
-    """The object segmenter's mask (:func:`~affnerf.model.segmenter.probability_mask`; inside ``box`` only when one
-    is given, the network still seeing the whole photo) and its confidence, the mean probability over that mask (0
+    """The object segmenter's mask (:func:`~affnerf.model.segmenter.probability_mask` of its map of the photo and of
+    the photo's tiles, :func:`~affnerf.model.segmenter.photo_probability`; inside ``box`` only when one is given,
+    the network still seeing the whole photo) and its confidence, the mean probability over that mask (0
     when it is empty). With OpenCV, when :data:`REFINE_SEGMENTER` and the confidence is at least ``redraw_from``
     (a caller that drops less sure masks spares their GrabCut), GrabCut then redraws the mask from the network's
     probabilities (:func:`~affnerf.predict.grabcut.refine_with_grabcut`, inside the box); the confidence stays the
     network's."""
-    prob = object_probability(model, rgb)
+    prob = photo_probability(model, rgb)
     inside = None
     if box is not None:
         x0, y0, x1, y1 = box
