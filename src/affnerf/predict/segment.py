@@ -4,8 +4,9 @@
 - ``grabcut``: OpenCV's GrabCut, started from a centred rectangle (the object is assumed inside it).
 - ``segmenter``: an object segmenter (:mod:`affnerf.model.segmenter`): the one that ships with affnerf (U²-Net-p
   fine-tuned to find the procedural families among clutter, :func:`affnerf.predict.shipped.shipped_segmenter`),
-  or one trained on your own object families with ``affnerf train-segmenter`` and given as a file; its main
-  region, redrawn by GrabCut from the network's probabilities when OpenCV is there. Its confidence is the mean
+  or one trained on your own object families with ``affnerf train-segmenter`` and given as a file, reading the
+  whole photo and its four corner tiles (:func:`~affnerf.model.segmenter.photo_probability`); its main region,
+  redrawn by GrabCut from the network's probabilities when OpenCV is there. Its confidence is the mean
   probability it gives the pixels of its own mask; below :data:`MIN_SEGMENTER_CONFIDENCE` the separation is
   doubtful.
 - ``salient``: the U²-Net-p salient-object model (:mod:`affnerf.predict.salient`), largest connected component.
