@@ -43,9 +43,12 @@ from affnerf.predict.mesh import model_mesh
 TOLERANCES = (0.5, 1.5, 3.0)
 
 
-def pixels_off_mask(points: np.ndarray, camera: tuple[float, float, float], target: CropTarget) -> np.ndarray:
+def pixels_off_mask(
+    points: np.ndarray, camera: tuple[float, float, float], target: CropTarget, gap: np.ndarray
+) -> np.ndarray:
     """(P,) distance in pixels from the crop's mask of each canonical point (P, 3) seen from ``camera`` (azimuth,
-    elevation, distance, looking at the origin); 99 outside the crop."""
+    elevation, distance, looking at the origin), read from ``gap`` (S, S), the mask's distance transform
+    (:func:`mask_gap`); 99 outside the crop."""
     az, el, dist = camera
     back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
     right = np.array([-np.sin(az), np.cos(az), 0.0])
@@ -55,9 +58,13 @@ def pixels_off_mask(points: np.ndarray, camera: tuple[float, float, float], targ
     k, side = target.intrinsics, target.mask.shape[0]
     u, v = rel @ right / depth * k[0] + k[2], -(rel @ up) / depth * k[1] + k[3]
     inside = (u >= 0) & (u < side) & (v >= 0) & (v < side)
-    gap = distance_transform_edt(target.mask < 0.5)
     ui, vi = np.clip(u.astype(int), 0, side - 1), np.clip(v.astype(int), 0, side - 1)
     return np.where(inside, gap[vi, ui], 99.0)
+
+
+def mask_gap(target: CropTarget) -> np.ndarray:
+    """(S, S) distance in pixels of each crop pixel from the crop's mask (0 on it)."""
+    return distance_transform_edt(target.mask < 0.5)
 
 
 def probe_object(loaded, obj: ObjectData, config: GraspEvalConfig) -> dict:
@@ -70,7 +77,8 @@ def probe_object(loaded, obj: ObjectData, config: GraspEvalConfig) -> dict:
     mesh = model_mesh(model, fit.codes, 128, None, model.occupancy(fit.codes))
     mesh = confirmed(mesh, model_mesh(model, first, 128, None, model.occupancy(first)))
     big = dataset_crop_target(obj, view, 128)
-    face_gap = pixels_off_mask(mesh.vertices[mesh.faces].mean(axis=1), fit.camera, big)
+    gap = mask_gap(big)
+    face_gap = pixels_off_mask(mesh.vertices[mesh.faces].mean(axis=1), fit.camera, big, gap)
     canonical = GraspObject.from_mesh(read_labelled_ply(obj.folder / "mesh.ply"), obj.record.object_id)
     size, task = object_size(obj, canonical, config), task_affordance(obj.record.category)
     truth = scaled(canonical, size.factor)
@@ -82,7 +90,7 @@ def probe_object(loaded, obj: ObjectData, config: GraspEvalConfig) -> dict:
         planning = scaled(GraspObject.from_mesh(replace(mesh, face_props=props)), size.factor)
         grasps, _ = _plan(planning, settings, ParallelJawGripper(), size.source)
         scores = score_grasps(truth, np.stack([g.pose for g in grasps]) if grasps else np.zeros((0, 4, 4)))
-        gaps = [float(pixels_off_mask(g.contacts / size.factor, fit.camera, big).max()) for g in grasps]
+        gaps = [float(pixels_off_mask(g.contacts / size.factor, fit.camera, big, gap).max()) for g in grasps]
         out["variants"][name] = {"on_part": [s.on(task) for s in scores], "contact_pixels_off_mask": gaps}
     return out
 
