@@ -108,8 +108,7 @@ def measure_segmenter(
     for name, box in boxes.items():
         seg, secs[f"segmenter --box{name}"] = timed(segment.segment, rgb, "segmenter", "composite", path, box)
         iou[f"segmenter --box{name}"] = segment.mask_iou(seg.mask, truth)
-    confidence = float(prob[mask].mean()) if mask.any() else 0.0
-    return iou, secs, {"segmenter_sweep": sweep, "segmenter_confidence": confidence}
+    return iou, secs, {"segmenter_sweep": sweep, "segmenter_confidence": segnet.mask_confidence(prob, mask)}
 
 
 def measure_one(rgb: np.ndarray, truth: np.ndarray, model, segmenter: Path) -> tuple[dict, dict, dict]:

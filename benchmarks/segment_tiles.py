@@ -3,12 +3,15 @@ segmenter mask on the composite benchmark's draws (``bench_composites.py``), fro
 map alone (as shipped until 2026-12-03) and from the per-pixel larger of it and the mean map of four overlapping
 corner tiles of each ``--shares`` (:func:`affnerf.model.segmenter.photo_probability`), each as the network's mask
 and redrawn by GrabCut from the map (:func:`affnerf.predict.grabcut.refine_with_grabcut`, as ``auto`` ships it).
-Also the seconds of each map (median over composites).
+Also the seconds of each map (median and mean over composites). With ``--below``, also the rule that reads the
+tiles only when the whole photo's own mask is less sure than each threshold.
 
-Run (choose on seed 1, check on the others)::
+Run (choose the share on seed 1, check it on the others; the rule, tried and not shipped, on held-out seeds 5-8 in
+two processes, ``--seeds 5 6`` and ``--seeds 7 8``)::
 
     .venv/bin/python benchmarks/segment_tiles.py --data /tmp/seg/data --seeds 1 --shares 0.5 0.6 0.75 --out choose.json
     .venv/bin/python benchmarks/segment_tiles.py --data /tmp/seg/data --seeds 2 0 3 4 --shares 0.6 --out check.json
+    .venv/bin/python benchmarks/segment_tiles.py --data /tmp/seg/data --seeds 5 6 --below 0.88 0.92 0.95 --out rule.json
 """
 
 from __future__ import annotations
@@ -37,10 +40,12 @@ def map_scores(rgb: np.ndarray, truth: np.ndarray, prob: np.ndarray) -> tuple[fl
     return mask_iou(mask, truth), mask_iou(redrawn, truth)
 
 
-def composite_scores(rgb: np.ndarray, truth: np.ndarray, model, shares: list[float]) -> tuple[dict, dict]:
-    """Per variant (``whole`` and ``tiles S``), the IoU of its mask and of its redrawn mask, and its map's seconds."""
+def composite_scores(rgb: np.ndarray, truth: np.ndarray, model, shares: list[float]) -> tuple[dict, dict, float]:
+    """Per variant (``whole`` and ``tiles S``), the IoU of its mask and of its redrawn mask, and its map's seconds;
+    and how sure the whole photo's own mask is (:func:`affnerf.model.segmenter.mask_confidence`)."""
     start = time.perf_counter()
     whole = segnet.object_probability(model, rgb)
+    confidence = segnet.mask_confidence(whole, segnet.probability_mask(whole))
     secs = {"whole": time.perf_counter() - start}
     scores = {"whole": map_scores(rgb, truth, whole)}
     for share in shares:
@@ -48,7 +53,17 @@ def composite_scores(rgb: np.ndarray, truth: np.ndarray, model, shares: list[flo
         prob = np.maximum(whole, segnet.tiled_probability(model, rgb, share))
         secs[f"tiles {share}"] = time.perf_counter() - start + secs["whole"]
         scores[f"tiles {share}"] = map_scores(rgb, truth, prob)
-    return scores, secs
+    return scores, secs, confidence
+
+
+def add_rules(scores: dict, secs: dict, confidence: float, shares: list[float], belows: list[float]) -> None:
+    """Adds to ``scores`` and ``secs`` the variants ``tiles S below T``: the tiles of share S read only when the
+    whole photo's mask is less than T sure, else the whole photo's map (tried, not shipped)."""
+    for share in shares:
+        for below in belows:
+            pick = f"tiles {share}" if confidence < below else "whole"
+            scores[f"tiles {share} below {below}"] = scores[pick]
+            secs[f"tiles {share} below {below}"] = secs[pick]
 
 
 def summary(rows: list[dict]) -> dict:
@@ -61,6 +76,7 @@ def summary(rows: list[dict]) -> dict:
             "redrawn": round(float(np.mean([r["iou"][name][1] for r in rows])), 4),
             "redrawn_at_least_0.9": round(float(np.mean([r["iou"][name][1] >= 0.9 for r in rows])), 4),
             "map_seconds_median": round(float(np.median([r["seconds"][name] for r in rows])), 3),
+            "map_seconds_mean": round(float(np.mean([r["seconds"][name] for r in rows])), 3),
         }
         for name in names
     }
@@ -72,16 +88,24 @@ def main() -> None:
     parser.add_argument("--composites", type=int, default=48)
     parser.add_argument("--seeds", type=int, nargs="+", default=[1])
     parser.add_argument("--shares", type=float, nargs="+", default=[segnet.SEGMENTER_TILE_SHARE])
+    parser.add_argument(
+        "--below", type=float, nargs="*", default=[], help="also the rule: tiles only under this confidence"
+    )
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
     model = segnet.read_segmenter(shipped.shipped_segmenter())
     segnet.object_probability(model, np.zeros((32, 32, 3), np.uint8))  # warm-up
-    result = {"machine": describe_machine(), "composites": args.composites, "shares": args.shares, "seeds": {}}
+    result = {"machine": describe_machine(), "composites": args.composites, "shares": args.shares, "below": args.below}
+    result["seeds"] = {}
     for seed in args.seeds:
         rows = []
         for c in bench_composites(args.data, seed, args.composites):
-            scores, secs = composite_scores(c.rgb, c.truth, model, args.shares)
-            rows.append({"object": c.obj.record.object_id, "background": c.background, "iou": scores, "seconds": secs})
+            scores, secs, confidence = composite_scores(c.rgb, c.truth, model, args.shares)
+            add_rules(scores, secs, confidence, args.shares, args.below)
+            rows.append(
+                {"object": c.obj.record.object_id, "background": c.background, "whole_confidence": confidence,
+                 "iou": scores, "seconds": secs}
+            )  # fmt: skip
         means = summary(rows)
         result["seeds"][str(seed)] = {"summary": means, "composites": rows}
         print(seed, json.dumps({k: v["redrawn"] for k, v in means.items()}), flush=True)

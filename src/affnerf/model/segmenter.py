@@ -250,6 +250,18 @@ def tiled_probability(model: AnySegmenter, rgb: np.ndarray, share: float = SEGME
     return total / np.maximum(count, 1.0)
 
 
+def mask_confidence(prob: np.ndarray, mask: np.ndarray) -> float:
+    """How sure the segmenter is of ``mask`` ((H, W) bool): the mean of its (H, W) probability ``prob`` over the
+    mask, 0 when it is empty.
+
+    Example:
+        >>> p = np.array([[0.9, 0.7, 0.1]], np.float32)
+        >>> round(mask_confidence(p, p > 0.5), 2), mask_confidence(p, p > 0.95)
+        (0.8, 0.0)
+    """
+    return float(prob[mask].mean()) if mask.any() else 0.0
+
+
 def photo_probability(model: AnySegmenter, rgb: np.ndarray, share: float | None = SEGMENTER_TILE_SHARE) -> np.ndarray:
     """(H, W) float32 object probability of a photo as ``predict`` reads it: per pixel the larger of the whole
     photo's map (:func:`object_probability`) and its tiles' (:func:`tiled_probability`; ``share`` None: the

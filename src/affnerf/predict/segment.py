@@ -40,7 +40,7 @@ from scipy import ndimage
 
 from affnerf.data.composite import largest_component
 from affnerf.errors import AffnerfError
-from affnerf.model.segmenter import load_segmenter, photo_probability, probability_mask
+from affnerf.model.segmenter import load_segmenter, mask_confidence, photo_probability, probability_mask
 from affnerf.predict import shipped
 from affnerf.predict.grabcut import grabcut_mask, opencv, refine_with_grabcut
 from affnerf.predict.salient import SalientUnavailable, load_salient_model, salient_mask
@@ -215,7 +215,7 @@ def segmenter_segmentation(rgb: np.ndarray, model, box: Box | None = None, redra
         inside = np.zeros(prob.shape, bool)
         inside[y0:y1, x0:x1] = True
     mask = probability_mask(prob, inside)
-    confidence = float(prob[mask].mean()) if mask.any() else 0.0
+    confidence = mask_confidence(prob, mask)
     if REFINE_SEGMENTER and mask.any() and confidence >= redraw_from and opencv() is not None:
         mask = refine_with_grabcut(rgb, mask, prob, inside)
     return Segmentation(mask, "segmenter", confidence=confidence, box=box)
