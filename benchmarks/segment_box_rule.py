@@ -28,7 +28,7 @@ from affnerf.predict import segment
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites  # noqa: E402
 
-THRESHOLDS = (0.6, 0.7, 0.75, 0.8, 0.85, 0.9, 0.93, 0.95)
+THRESHOLDS = (0.4, 0.5, 0.6, 0.7, 0.75, 0.8, 0.85, 0.9, 0.93, 0.95)
 
 
 def main() -> None:

@@ -60,9 +60,10 @@ SEGMENTER_EXTRA_DISTANCE = 0.1
 #: share of the photo's height and width, one at each corner, enlarged to the network's input: a small object (1-2 %
 #: of the photo) is seen 1 / 0.6 times larger and without the photo's own subject beside it. Chosen on the composite
 #: benchmark's seed-1 draws (shares 0.5 / 0.6 / 0.75: mean redrawn mask IoU 0.889 / 0.903 / 0.881, the whole photo
-#: alone 0.880), checked on seeds 0 and 2-4 (240 composites: 0.891 against 0.869); it costs four more passes of
-#: each network (``auto`` about 5.5 s an image on 2 cores, against 1.2 s) (benchmarks/results/segmenter_u2netp.md,
-#: "Tiles").
+#: alone 0.880), checked on seeds 0 and 2-4 (240 composites: 0.891 against 0.869) and 5-8 (192: 0.905 against
+#: 0.878); it costs four more passes of each network (``auto`` about 5.5 s an image on 2 cores, against 1.2 s), also
+#: where the whole photo's mask is sure: the tiles still add its thin parts there (benchmarks/results/
+#: segmenter_u2netp.md, "Tiles" and "Tiles on four new seeds").
 SEGMENTER_TILE_SHARE = 0.6
 
 
