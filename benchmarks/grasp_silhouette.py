@@ -39,6 +39,7 @@ from affnerf.predict.agreement import confirmed
 from affnerf.predict.invert import CropTarget, InversionConfig, dataset_crop_target, invert
 from affnerf.predict.loading import load_model
 from affnerf.predict.mesh import model_mesh
+from affnerf.predict.viewpoint import project_points
 
 TOLERANCES = (0.5, 1.5, 3.0)
 
@@ -49,15 +50,9 @@ def pixels_off_mask(
     """(P,) distance in pixels from the crop's mask of each canonical point (P, 3) seen from ``camera`` (azimuth,
     elevation, distance, looking at the origin), read from ``gap`` (S, S), the mask's distance transform
     (:func:`mask_gap`); 99 outside the crop."""
-    az, el, dist = camera
-    back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-    right = np.array([-np.sin(az), np.cos(az), 0.0])
-    up = np.cross(back, right)
-    rel = points - dist * back
-    depth = np.maximum(-(rel @ back), 1e-6)
-    k, side = target.intrinsics, target.mask.shape[0]
-    u, v = rel @ right / depth * k[0] + k[2], -(rel @ up) / depth * k[1] + k[3]
-    inside = (u >= 0) & (u < side) & (v >= 0) & (v < side)
+    u, v, front = (a[0] for a in project_points(points, np.asarray([camera], float), np.asarray(target.intrinsics)))
+    side = target.mask.shape[0]
+    inside = (u >= 0) & (u < side) & (v >= 0) & (v < side) & front
     ui, vi = np.clip(u.astype(int), 0, side - 1), np.clip(v.astype(int), 0, side - 1)
     return np.where(inside, gap[vi, ui], 99.0)
 

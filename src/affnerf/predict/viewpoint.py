@@ -45,6 +45,35 @@ def camera_grid(azimuths: int, elevations_deg: Sequence[float], distances: Seque
     return np.stack([g.ravel() for g in grid], axis=1)
 
 
+def project_points(
+    points: np.ndarray, cameras: np.ndarray, intrinsics: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pixel coordinates of a point set seen by many cameras through one crop.
+
+    Args:
+        points: (P, 3) canonical points.
+        cameras: (N, 3) azimuth, elevation, distance of each camera (looking at the origin).
+        intrinsics: (4,) crop intrinsics (fx, fy, cx, cy).
+
+    Returns:
+        (N, P) float column u and row v of each point in each camera's image (pixel edges at integers), and (N, P)
+        bool, True where the point lies in front of the camera.
+
+    Example:
+        >>> u, v, front = project_points(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), np.array([10, 10, 16, 16]))
+        >>> float(u[0, 0]), float(v[0, 0]), bool(front[0, 0])
+        (16.0, 16.0, True)
+    """
+    az, el, dist = cameras[:, 0], cameras[:, 1], cameras[:, 2]
+    back = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], 1)  # (N, 3)
+    right = np.stack([-np.sin(az), np.cos(az), np.zeros_like(az)], 1)
+    up = np.cross(back, right)
+    rel = points[None] - (dist[:, None] * back)[:, None]  # (N, P, 3) from the eye
+    x, y, z = (np.einsum("npk,nk->np", rel, axis) for axis in (right, up, back))
+    depth = np.maximum(-z, 1e-6)
+    return x / depth * intrinsics[0] + intrinsics[2], -y / depth * intrinsics[1] + intrinsics[3], z < 0
+
+
 def project_silhouettes(points: np.ndarray, cameras: np.ndarray, intrinsics: np.ndarray, size: int) -> np.ndarray:
     """Binary silhouettes of a point set seen by many cameras through one crop.
 
@@ -57,16 +86,9 @@ def project_silhouettes(points: np.ndarray, cameras: np.ndarray, intrinsics: np.
     Returns:
         (N, size, size) bool, True where at least one point projects.
     """
-    az, el, dist = cameras[:, 0], cameras[:, 1], cameras[:, 2]
-    back = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], 1)  # (N, 3)
-    right = np.stack([-np.sin(az), np.cos(az), np.zeros_like(az)], 1)
-    up = np.cross(back, right)
-    rel = points[None] - (dist[:, None] * back)[:, None]  # (N, P, 3) from the eye
-    x, y, z = (np.einsum("npk,nk->np", rel, axis) for axis in (right, up, back))
-    depth = np.maximum(-z, 1e-6)
-    u = np.floor(x / depth * intrinsics[0] + intrinsics[2]).astype(np.int64)
-    v = np.floor(-y / depth * intrinsics[1] + intrinsics[3]).astype(np.int64)
-    keep = (u >= 0) & (u < size) & (v >= 0) & (v < size) & (z < 0)
+    u, v, front = project_points(points, cameras, intrinsics)
+    u, v = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+    keep = (u >= 0) & (u < size) & (v >= 0) & (v < size) & front
     out = np.zeros((len(cameras), size * size), bool)
     rows = np.broadcast_to(np.arange(len(cameras))[:, None], u.shape)
     out[rows[keep], (v * size + u)[keep]] = True
