@@ -279,6 +279,7 @@ def probability_mask(
     inside: np.ndarray | None = None,
     power: float = SEGMENTER_REGION_SURENESS_POWER,
     main_min_size: float = SEGMENTER_MAIN_MIN_SIZE,
+    thresholds: tuple[float, float] = (SEGMENTER_LOW_THRESHOLD, SEGMENTER_THRESHOLD),
 ) -> np.ndarray:
     """(H, W) bool object mask of the segmenter's (H, W) probability map: pixels above
     :data:`SEGMENTER_THRESHOLD`, with those above :data:`SEGMENTER_LOW_THRESHOLD` joined to them (hysteresis);
@@ -288,7 +289,8 @@ def probability_mask(
     :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE` of the main one's size and
     within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on the composite benchmark's
     seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region");
-    ``power`` and ``main_min_size`` replace the main region's two constants (benchmarks/segment_region_rule.py).
+    ``power`` and ``main_min_size`` replace the main region's two constants (benchmarks/segment_region_rule.py),
+    ``thresholds`` the hysteresis's (low, high) pair (benchmarks/segment_thresholds.py).
 
     Example:
         >>> p = np.zeros((3, 40)); p[1, :12] = 0.95; p[1, 12] = 0.45; p[1, 14] = 0.95; p[0, 0] = 0.45; p[1, 30] = 0.99
@@ -299,7 +301,7 @@ def probability_mask(
     from scipy import ndimage
     from skimage.filters import apply_hysteresis_threshold
 
-    found = apply_hysteresis_threshold(np.asarray(prob, np.float32), SEGMENTER_LOW_THRESHOLD, SEGMENTER_THRESHOLD)
+    found = apply_hysteresis_threshold(np.asarray(prob, np.float32), *thresholds)
     if inside is not None:
         found &= inside
     labels, count = ndimage.label(found, structure=np.ones((3, 3)))
