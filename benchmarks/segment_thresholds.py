@@ -131,7 +131,7 @@ def sweep_seed(cache_dir: Path, seed: int, which: str) -> list[dict]:
         z = np.load(path)
         rgb, truth, prob = z["rgb"], z["truth"], z["prob"]
         row = {"composite": path.stem, "object": str(z["object"]), "background": str(z["background"])}
-        row["scores"] = {name: redrawn_iou(rgb, truth, prob, p, t) for name, (p, t) in grid.items()}
+        row["scores"] = {n: [round(v, 4) for v in redrawn_iou(rgb, truth, prob, p, t)] for n, (p, t) in grid.items()}
         rows.append(row)
         print(path.stem, round(row["scores"][next(iter(grid))][1], 3), flush=True)
     return rows
@@ -153,7 +153,7 @@ def sweep(args: argparse.Namespace) -> None:
     for seed in args.seeds:
         rows = sweep_seed(args.cache, seed, args.set)
         result["seeds"][str(seed)] = {"means": seed_means(rows), "composites": rows}
-        args.out.write_text(json.dumps(result, indent=1) + "\n")
+        args.out.write_text(json.dumps(result, separators=(",", ":")) + "\n")  # compact: 14 variants a composite
 
 
 def report(args: argparse.Namespace) -> None:
