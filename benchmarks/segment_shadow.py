@@ -26,18 +26,16 @@ import torch
 
 from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
-from affnerf.predict import grabcut, shipped
-from affnerf.predict.segment import mask_iou
+from affnerf.predict import shipped
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import backgrounds, bench_composites, composite  # noqa: E402
+from segment_tiles import map_scores  # noqa: E402
 
 
 def shipped_mask_iou(model, rgb: np.ndarray, truth: np.ndarray) -> float:
     """IoU with the (H, W) bool ``truth`` of ``auto``'s segmenter mask of the (H, W, 3) ``rgb``, redrawn by GrabCut."""
-    prob = segnet.photo_probability(model, rgb)
-    mask = segnet.probability_mask(prob)
-    return mask_iou(grabcut.refine_with_grabcut(rgb, mask, prob) if mask.any() else mask, truth)
+    return map_scores(rgb, truth, segnet.photo_probability(model, rgb))[1]
 
 
 def shadow_rows(data: Path, seed: int, count: int, model) -> list[dict]:

@@ -44,16 +44,10 @@ from affnerf.predict.segment import mask_iou
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites  # noqa: E402
 
-#: Hysteresis (low, high) and probability trimap (band, sure background, sure object, thin radius) as shipped, and
-#: the trimap before the sure thin parts (the first two sweeps' baseline).
+#: The shipped hysteresis (low, high), and the probability trimap (band, sure background, sure object, thin radius)
+#: before the sure thin parts: every sweep's baseline.
 SHIPPED = (segnet.SEGMENTER_LOW_THRESHOLD, segnet.SEGMENTER_THRESHOLD)
-SHIPPED_TRIMAP = (
-    grabcut.PROBABILITY_TRIMAP_BAND,
-    grabcut.PROBABILITY_SURE_BACKGROUND,
-    grabcut.PROBABILITY_SURE_OBJECT,
-    grabcut.PROBABILITY_THIN_RADIUS,
-)
-BEFORE_TRIMAP = (0.06, 0.05, None, None)
+BEFORE_TRIMAP = (grabcut.PROBABILITY_TRIMAP_BAND, grabcut.PROBABILITY_SURE_BACKGROUND, None, None)
 #: Hysteresis pairs tried with the trimap before, and trimaps tried with the shipped pair (``--set main``).
 PAIRS = [(0.3, 0.5), (0.4, 0.6), (0.5, 0.6), (0.5, 0.7), (0.6, 0.7), (0.6, 0.8)]
 TRIMAPS = [
@@ -157,8 +151,8 @@ def sweep(args: argparse.Namespace) -> None:
 
 
 def report(args: argparse.Namespace) -> None:
-    """Prints a markdown table of the sweeps' redrawn mean IoU per variant: the choice seeds, each check seed, the
-    check seeds' mean and share ≥ 0.9, with each variant's change against the shipped one."""
+    """Prints a markdown table of the sweeps' redrawn mean IoU per variant: the choice seeds, each check seed, and
+    over the check seeds' composites the mean and the share ≥ 0.9."""
     seeds = {}
     for path in args.sweeps:
         seeds.update(json.loads(path.read_text())["seeds"])
