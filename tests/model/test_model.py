@@ -14,7 +14,7 @@ from affnerf.model.config import ModelConfig
 from affnerf.model.encoding import encoding_dim, positional_encoding
 from affnerf.model.field import ConditionalField, ObjectCodes
 from affnerf.model.registry import build_model
-from affnerf.model.resnet import CodeEncoder, ResNet18
+from affnerf.model.resnet import CodeEncoder, ResNet18, spatial_soft_argmax
 
 SMALL = ModelConfig(
     encoder_width=0.125,
@@ -237,6 +237,40 @@ def test_one_encoder_gives_both_codes_from_one_trunk_and_both_heads_learn():
     (codes.shape.sum() + codes.appearance.sum()).backward()
     assert one.shape_encoder.head.weight.grad.abs().sum() > 0
     assert one.shape_encoder.second_head.weight.grad.abs().sum() > 0
+
+
+def test_keypoints_give_where_each_channel_peaks():
+    features = torch.full((1, 2, 8, 8), -20.0)
+    features[0, 0, 1, 6] = 20.0  # channel 0 peaks near the top right, channel 1 is flat
+    points = spatial_soft_argmax(features)
+    assert points.shape == (1, 4)
+    torch.testing.assert_close(points[0, :2], torch.tensor([0.625, -0.625]), atol=1e-4, rtol=0)
+    torch.testing.assert_close(points[0, 2:], torch.zeros(2), atol=1e-6, rtol=0)
+
+
+def test_a_keypoint_shape_encoder_codes_where_a_shape_is_which_the_mean_cannot():
+    torch.manual_seed(0)
+    model = AffNeRF(replace(SMALL, shape_pooling="keypoints"), num_classes=3)
+    encoder = model.shape_encoder
+    assert encoder.pooling == "keypoints" and model.appearance_encoder.pooling == "mean"
+    channels = encoder.backbone.channels
+    assert encoder.head.in_features == channels[3] + 2 * (channels[1] + channels[2])
+    left, right = torch.ones(1, 3, 32, 32), torch.ones(1, 3, 32, 32)
+    left[..., 8:24, 2:10], right[..., 8:24, 22:30] = 0.0, 0.0  # one dark block, mirrored
+    pooled = [encoder.pool(encoder.backbone(image)) for image in (left, right)]
+    # its keypoints' x coordinates move with the block; the mean of the last stage barely sees the difference
+    keypoint_x = [p[0, channels[3] :: 2] for p in pooled]
+    assert (keypoint_x[1] - keypoint_x[0]).mean() > 0.05
+    codes = model.encode(torch.rand(2, 3, 32, 32))
+    codes.shape.sum().backward()
+    assert encoder.backbone.layers[1][0].conv1.weight.grad.abs().sum() > 0
+
+
+def test_only_aff_nerf_pools_its_shape_encoder_into_keypoints():
+    with pytest.raises(AffnerfError, match="shape-pooling pools AFF-NeRF's shape encoder"):
+        build_model(replace(SMALL, kind="pixelnerf", shape_pooling="keypoints"), 3)
+    with pytest.raises(ValueError, match="pooling is mean or keypoints"):
+        CodeEncoder(32, 0.25, pooling="max")
 
 
 def test_only_aff_nerf_merges_its_encoders():

@@ -60,7 +60,9 @@ class AffNeRF(ConditionedNeRF):
         super().__init__(config, num_classes)
         label_classes = num_classes if config.view_affordance_weight > 0 else 0
         one = config.encoders == "one"
-        self.shape_encoder = CodeEncoder(config.code_dim, config.encoder_width, label_classes, second_code=one)
+        self.shape_encoder = CodeEncoder(
+            config.code_dim, config.encoder_width, label_classes, second_code=one, pooling=config.shape_pooling
+        )
         self.appearance_encoder = None if one else CodeEncoder(config.code_dim, config.encoder_width)
         self.planes: PlaneGenerator | None = None
         trunk_dim = config.code_dim

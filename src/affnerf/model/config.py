@@ -85,6 +85,10 @@ class ModelConfig:
         encoders: AFF-NeRF only: ``two`` ResNet18 encoders, one for the shape code and one for the appearance code
             (the paper), or, beyond the paper, ``one`` whose pooled features give both codes through two linear
             layers (pixelNeRF's single encoder): a step saves one encoder's forward and backward pass.
+        shape_pooling: AFF-NeRF only: how the shape encoder pools its feature maps into the code's inputs: ``mean``
+            (the paper: the last stage averaged over the crop) or, beyond the paper, ``keypoints``: also where in the
+            crop each channel of the second and third stages peaks (a spatial soft-argmax, Levine et al. 2016), so
+            the code is told where the parts are, which the average forgets.
         code_noise: AFF-NeRF only, training only: Gaussian noise added to each code of a step, its standard
             deviation this times the spread (standard deviation) of that code dimension over the step's objects
             (0 = none, the paper). Beyond the paper: the decoder learns to give a plausible object for codes near
@@ -120,6 +124,7 @@ class ModelConfig:
     plane_resolution: int = 64
     plane_channels: int = 16
     encoders: Literal["two", "one"] = "two"
+    shape_pooling: Literal["mean", "keypoints"] = "mean"
     code_noise: float = 0.0
 
 

@@ -45,10 +45,11 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
 
     Raises:
         ValueError: for a kind no class is registered under.
-        AffnerfError: for ``triplane`` conditioning, a ``view_affordance_weight``, ``encoders`` ``one`` or a
-            ``code_noise`` of another kind than ``affnerf`` (only AFF-NeRF's shape code can be decoded into planes,
-            only its encoder labels pixels, only it has the two encoders that ``one`` merges and the two global
-            codes the noise is added to), or a negative ``code_noise``.
+        AffnerfError: for ``triplane`` conditioning, a ``view_affordance_weight``, ``encoders`` ``one``, a
+            ``shape_pooling`` other than ``mean`` or a ``code_noise`` of another kind than ``affnerf`` (only
+            AFF-NeRF's shape code can be decoded into planes, only its encoder labels pixels or pools into
+            keypoints, only it has the two encoders that ``one`` merges and the two global codes the noise is added
+            to), or a negative ``code_noise``.
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
@@ -62,4 +63,6 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
         raise AffnerfError(f"--model.code-noise is a share of the codes' spread (>= 0), not {config.code_noise}")
     if config.code_noise > 0 and config.kind != "affnerf":
         raise AffnerfError(f"--model.code-noise perturbs AFF-NeRF's two global codes; a {config.kind} model has none")
+    if config.shape_pooling != "mean" and config.kind != "affnerf":
+        raise AffnerfError(f"--model.shape-pooling pools AFF-NeRF's shape encoder; a {config.kind} model has none")
     return MODEL_KINDS[config.kind](config, num_classes)

@@ -81,6 +81,29 @@ def stacked_features(feats: list[torch.Tensor]) -> torch.Tensor:
     return torch.cat(resized, dim=1)
 
 
+#: Stages (0-based) whose feature maps give keypoints in :class:`CodeEncoder`'s ``keypoints`` pooling: the second
+#: and third (H / 8 and H / 16: 8 x 8 and 4 x 4 cells of a 64-pixel crop).
+KEYPOINT_STAGES = (1, 2)
+
+
+def spatial_soft_argmax(features: torch.Tensor) -> torch.Tensor:
+    """Each channel's expected image position under a softmax over its map (Levine et al. 2016's spatial
+    soft-argmax): (B, C, H, W) -> (B, 2C) coordinates in [-1, 1], x then y of each channel (cell centres).
+
+    Example:
+        >>> f = torch.zeros(1, 1, 4, 4); f[0, 0, 3, 0] = 50.0   # a peak in the bottom-left cell
+        >>> spatial_soft_argmax(f).round(decimals=2).tolist()
+        [[-0.75, 0.75]]
+    """
+    b, c, h, w = features.shape
+    weights = torch.softmax(features.reshape(b, c, h * w), dim=-1).reshape(b, c, h, w)
+    xs = torch.linspace(-1 + 1 / w, 1 - 1 / w, w, dtype=features.dtype, device=features.device)
+    ys = torch.linspace(-1 + 1 / h, 1 - 1 / h, h, dtype=features.dtype, device=features.device)
+    x = (weights.sum(dim=2) * xs).sum(dim=-1)
+    y = (weights.sum(dim=3) * ys).sum(dim=-1)
+    return torch.stack([x, y], dim=-1).reshape(b, 2 * c)
+
+
 class CodeEncoder(nn.Module):
     """An image to a global code: ResNet18, global average pooling, a linear layer; optionally also per-pixel
     class logits of the image (a 1x1 convolution over all four stages' features, :func:`stacked_features`).
@@ -91,15 +114,29 @@ class CodeEncoder(nn.Module):
         label_classes: classes of the pixel labelling head (0: no head, the paper's encoder).
         second_code: also give a second code of the same size from the same pooled features (its own linear
             layer, ``second_head``): one trunk for two codes.
+        pooling: ``mean`` (the paper: the last stage averaged over the image) or ``keypoints`` (beyond the paper:
+            also the :func:`spatial_soft_argmax` of every channel of the :data:`KEYPOINT_STAGES`, where in the
+            crop each feature peaks, which the average forgets).
     """
 
     def __init__(
-        self, code_dim: int = 32, width: float = 1.0, label_classes: int = 0, second_code: bool = False
+        self,
+        code_dim: int = 32,
+        width: float = 1.0,
+        label_classes: int = 0,
+        second_code: bool = False,
+        pooling: str = "mean",
     ) -> None:
         super().__init__()
+        if pooling not in ("mean", "keypoints"):
+            raise ValueError(f"pooling is mean or keypoints, not {pooling!r}")
         self.backbone = ResNet18(width)
-        self.head = nn.Linear(self.backbone.channels[-1], code_dim)
-        self.second_head = nn.Linear(self.backbone.channels[-1], code_dim) if second_code else None
+        self.pooling = pooling
+        pooled = self.backbone.channels[-1]
+        if pooling == "keypoints":
+            pooled += 2 * sum(self.backbone.channels[i] for i in KEYPOINT_STAGES)
+        self.head = nn.Linear(pooled, code_dim)
+        self.second_head = nn.Linear(pooled, code_dim) if second_code else None
         self.label_head = nn.Conv2d(sum(self.backbone.channels), label_classes, 1) if label_classes else None
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
@@ -112,12 +149,19 @@ class CodeEncoder(nn.Module):
         code, _, logits = self.encode_both(images, labels)
         return code, logits
 
+    def pool(self, feats: list[torch.Tensor]) -> torch.Tensor:
+        """The backbone's stage feature maps -> (B, F) pooled features (``pooling``)."""
+        pooled = feats[-1].mean(dim=(2, 3))
+        if self.pooling == "mean":
+            return pooled
+        return torch.cat([pooled, *(spatial_soft_argmax(feats[i]) for i in KEYPOINT_STAGES)], dim=1)
+
     def encode_both(
         self, images: torch.Tensor, labels: bool = True
     ) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor | None]:
         """As :meth:`encode`, with the second code (B, code_dim) between them (None without ``second_code``)."""
         feats = self.backbone(images)
-        pooled = feats[-1].mean(dim=(2, 3))
+        pooled = self.pool(feats)
         second = None if self.second_head is None else self.second_head(pooled)
         if not labels or self.label_head is None:
             return self.head(pooled), second, None
