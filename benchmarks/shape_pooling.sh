@@ -3,7 +3,7 @@
 # encoder averages the last stage's features over the crop) against the same preset whose shape encoder also gives
 # the code where each channel of its second and third stages peaks (`--model.shape-pooling keypoints`, a spatial
 # soft-argmax), from scratch, side by side, one core each, the same schedule and minutes; then both calibrated and
-# scored on val40.
+# scored on val40 and on the 64 test objects (test64), side by side.
 #   DATA=... benchmarks/shape_pooling.sh      (SEED 0, the training seed of both runs; LIMIT minutes; STEPS: the
 #   schedule's length)
 set -euo pipefail
@@ -20,3 +20,6 @@ source benchmarks/side_by_side.sh
 tag=$(seed_tag)
 scored_pair "mean$tag" "$STEPS" --seed "$SEED" -- "keypoints$tag" "$STEPS" --seed "$SEED" \
     --model.shape-pooling keypoints
+test64 "mean$tag" "$W/mean$tag" &
+test64 "keypoints$tag" "$W/keypoints$tag" &
+wait

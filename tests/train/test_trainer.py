@@ -297,3 +297,28 @@ def test_validation_renders_and_scores_held_out_objects(trained_runs, train_data
     result = validate(loaded.model, [ds.load_object(e) for e in ds.objects(split="val")], 0.5, views_per_object=2)
     assert len(result.images) == 2 and result.images[0].shape == (15, 5 * 20, 3)
     assert 0 <= result.miou <= 1 and 0 <= result.accuracy <= 1 and result.psnr > 0
+
+
+def test_init_from_grows_a_mean_pooling_shape_encoder_into_keypoints_with_the_same_codes(tiny_train_config, tmp_path):
+    first = tiny_train_config(out=tmp_path / "mean", steps=4)
+    train(first)
+    ended = torch.load(first.out / "checkpoints" / "step_00000004.pt", weights_only=True)["model"]
+    grown_config = replace(first, out=tmp_path / "keypoints", steps=2, init_from=first.out)
+    grown_config = replace(grown_config, model=replace(grown_config.model, shape_pooling="keypoints"))
+    trainer = Trainer(grown_config, dist_utils.Context(rank=0, world=1, device=torch.device("cpu")))
+    trainer.setup()
+    grown = trainer.state.model.state_dict()
+    head = "shape_encoder.head.weight"
+    assert set(grown) == set(ended) and grown[head].shape[1] > ended[head].shape[1]
+    assert (
+        torch.equal(grown[head][:, : ended[head].shape[1]], ended[head])
+        and not grown[head][:, ended[head].shape[1] :].any()
+    )
+    assert all(torch.equal(grown[key], ended[key]) for key in ended if key != head)
+    model = trainer.state.model.eval()
+    source = Trainer(replace(first, out=tmp_path / "again", init_from=first.out), trainer.ctx)
+    source.setup()
+    crops = torch.rand(2, 3, first.model.encoder_resolution, first.model.encoder_resolution)
+    with torch.no_grad():
+        torch.testing.assert_close(model.encode(crops).shape, source.state.model.eval().encode(crops).shape)
+    assert main(train_argv(grown_config)) == 0

@@ -62,6 +62,8 @@ def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> P
     base, added = grown_config(data, dataclasses.replace(model.config, coarse_field="own") if shrink else model.config)
     check_compatible(data, base, num_classes, path)
     weights = one_field_weights(inference_weights(data)) if shrink else inference_weights(data)
+    if "keypoints" in added:
+        weights = keypoint_head_weights(weights, model.state_dict())
     missing, unexpected = model.load_state_dict(weights, strict=not added)
     if unexpected or any(not any(part in key for part in added) for key in missing):
         raise AffnerfError(f"{path}: weights do not fit the model (missing {missing}, unexpected {unexpected})")
@@ -81,15 +83,37 @@ def one_field_weights(weights: dict[str, torch.Tensor]) -> dict[str, torch.Tenso
     return {k.replace("renderer.fine.", "renderer.coarse.", 1): v for k, v in kept.items()}
 
 
+def keypoint_head_weights(weights: dict[str, torch.Tensor], target: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """A mean-pooling shape encoder's weights for the same encoder with ``keypoints`` pooling: its code head's
+    (code_dim, C) weight gets zero columns for the keypoint features ``target``'s head reads after the C pooled ones,
+    so the grown encoder gives the same code (:class:`affnerf.model.resnet.CodeEncoder`).
+
+    Example:
+        >>> w = {"shape_encoder.head.weight": torch.ones(2, 3)}
+        >>> keypoint_head_weights(w, {"shape_encoder.head.weight": torch.empty(2, 5)})["shape_encoder.head.weight"]
+        tensor([[1., 1., 1., 0., 0.],
+                [1., 1., 1., 0., 0.]])
+    """
+    grown = dict(weights)
+    for key in ("shape_encoder.head.weight", "shape_encoder.second_head.weight"):
+        if key in weights:
+            pad = target[key].shape[1] - weights[key].shape[1]
+            grown[key] = torch.nn.functional.pad(weights[key], (0, pad))
+    return grown
+
+
 def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig, tuple[str, ...]]:
     """The configuration a checkpoint must match (:func:`check_compatible`) for ``config``'s model to start from
     it, and the fragments of the weight names that model may add: ``.film.`` when the checkpoint's field
     concatenates its code and ``config`` asks for FiLM, ``.label_head.`` when ``config`` gives the shape encoder a
-    pixel-labelling head the checkpoint lacks. (Fields that do not change the weights, such as the encoders' crop
+    pixel-labelling head the checkpoint lacks, ``keypoints`` (no weight name: the shape encoder's code head widens,
+    :func:`keypoint_head_weights`) when ``config`` pools the shape encoder into keypoints and the checkpoint
+    averages. (Fields that do not change the weights, such as the encoders' crop
     side, may differ anyway: ``NON_ARCHITECTURE_FIELDS``.)
 
-    Both starts are exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), and the
-    labelling head only adds a training loss, so the grown model computes what the checkpoint did.
+    Every start is exact: FiLM's modulation is zero-initialised (:class:`affnerf.model.field.Field`), the
+    labelling head only adds a training loss and the keypoints enter the code with zero weights, so the grown model
+    computes what the checkpoint did.
     """
     saved = data.get("model_config", {})
     added: list[str] = []
@@ -99,6 +123,9 @@ def grown_config(data: dict[str, Any], config: ModelConfig) -> tuple[ModelConfig
     if config.view_affordance_weight > 0 and not saved.get("view_affordance_weight", 0.0):
         config = dataclasses.replace(config, view_affordance_weight=0.0)
         added.append(".label_head.")
+    if config.shape_pooling == "keypoints" and saved.get("shape_pooling", "mean") == "mean":
+        config = dataclasses.replace(config, shape_pooling="mean")
+        added.append("keypoints")
     return config, tuple(added)
 
 

@@ -34,7 +34,7 @@ from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
 from affnerf.train.augment import jitter_crops
 from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
-from affnerf.train.config import TrainConfig, check_options
+from affnerf.train.config import TrainConfig, check_options, for_model_kind
 from affnerf.train.ema import WeightAverage
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
@@ -200,7 +200,7 @@ class Trainer:
     hooks: list[Hook]
 
     def __init__(self, config: TrainConfig, ctx: dist_utils.Context, started: float | None = None) -> None:
-        self.config, self.ctx = config, ctx
+        self.config, self.ctx = for_model_kind(config), ctx
         self.started = time.perf_counter() if started is None else started
         self.step = 0
         self.end = min(config.steps, config.stop_at) if config.stop_at > 0 else config.steps
