@@ -20,9 +20,10 @@ BASE_STEPS="${BASE_STEPS:-pixelnerf:4500 semantic-ray:2400 gsnerf:2300}"
 LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (48 min of one core, beside another run)
 LOCO_BASE_STEPS="${LOCO_BASE_STEPS:-pixelnerf:1500 semantic-ray:800 gsnerf:780}"  # and the baselines', 9 min each
 # the shipped model and the leave-one-out runs were trained with the small preset as it was until the evening of
-# 2026-11-28 (a coarse field of its own), 2026-11-29 (Adam's exponential fall from 1e-3, no warm-up) and 2026-12-05
-# (a shape encoder that only averages its features)
-OLD_FIELD="--model.coarse-field own --optim.schedule exponential --optim.warmup-steps 0 --model.shape-pooling mean"
+# 2026-11-28 (a coarse field of its own), 2026-11-29 (Adam's exponential fall from 1e-3, no warm-up), 2026-12-01
+# (no rays drawn near the outline) and 2026-12-05 (a shape encoder that only averages its features)
+OLD_FIELD="--model.coarse-field own --optim.schedule exponential --optim.warmup-steps 0 --outline-fraction 0"
+OLD_FIELD="$OLD_FIELD --model.shape-pooling mean"
 SHIPPED_RECIPE="$OLD_FIELD --optim.lr 1e-3"
 # the posed baselines' committed rows were trained with the small preset as it was before 2026-11-26
 OLD_SMALL="$SHIPPED_RECIPE --objects-per-step 4 --points-per-object 1024 --optim.lr-final 1e-4"
