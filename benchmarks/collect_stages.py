@@ -7,7 +7,7 @@ protocol on the 64 test objects (W/test64_NAME); a reference results file's runs
 (``--reference``, e.g. the plain stage's row in points_weight.json) can be copied in beside them. With
 ``--markdown``, the tables of a results page (val40, per category, the hollow families and thin parts, grasps) are
 written from those numbers, the shipped model's surface errors (results/surface_errors.json) as the first row of
-theirs.
+theirs. With ``--compact`` the file leaves out the confusion matrices and per-class IoUs and rounds to 5 decimals.
 
     .venv/bin/python benchmarks/collect_stages.py --work W --names a b --out benchmarks/results/X.json \
         [--reference benchmarks/results/points_weight.json:0.1:plain] [--markdown TABLES.md]
@@ -29,6 +29,16 @@ def _eval_means(folder: Path) -> dict | None:
     """An ``affnerf eval`` folder's mean and per-category metrics, or None when it is not there."""
     metrics = _read(folder / "metrics.json")
     return None if metrics is None else {"mean": metrics["mean"], "categories": metrics["categories"]}
+
+
+def compact(value):
+    """``value`` without confusion matrices and per-class IoUs, floats rounded to 5 decimals (a results file's
+    means and per-category metrics only)."""
+    if isinstance(value, dict):
+        return {k: compact(v) for k, v in value.items() if k not in ("confusion", "IoU_per_class")}
+    if isinstance(value, list):
+        return [compact(v) for v in value]
+    return round(value, 5) if isinstance(value, float) else value
 
 
 def stage_scores(work: Path, name: str) -> dict:
@@ -135,6 +145,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--reference", action="append", default=[], help="FILE:RUN:NAME, a run of a results file")
     parser.add_argument("--markdown", type=Path, help="write the results page's tables here")
+    parser.add_argument("--compact", action="store_true", help="no confusion matrices or per-class IoUs")
     args = parser.parse_args()
     runs = {}
     for ref in args.reference:
@@ -143,7 +154,7 @@ def main() -> None:
     runs.update({name: stage_scores(args.work, name) for name in args.names})
     for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (any stage)
         run["test64"] = _eval_means(args.work / f"test64_{name}")
-    args.out.write_text(json.dumps({"runs": runs}, indent=1) + "\n")
+    args.out.write_text(json.dumps({"runs": compact(runs) if args.compact else runs}, indent=1) + "\n")
     if args.markdown:
         shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
         parts = [eval_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs)]

@@ -4,7 +4,8 @@
 # keypoints enter the code with zero weights, so it starts as the shipped model) against the same stage that keeps
 # the mean, side by side, one core each, the same schedule (a fresh Adam, 2e-4 -> 2e-5 over STEPS) and minutes;
 # then each calibrated on 32 validation objects and scored on val40 and the 64 test objects.
-#   DATA=... benchmarks/keypoint_stage.sh      (STEPS: the schedule's length; LIMIT minutes)
+#   DATA=... benchmarks/keypoint_stage.sh      (STEPS: the schedule's length; LIMIT minutes); the scores in
+#   W/keypoint_stage.json (results/keypoint_stage.json)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -20,15 +21,9 @@ export OMP_NUM_THREADS=1
 source benchmarks/side_by_side.sh
 warm_cache "$CACHE"
 # shellcheck disable=SC2086
-calibrated_stage stage_mean "$SHIPPED" "$STEPS" "$CACHE" $OWN --model.shape-pooling mean &
+scored_further_stage stage_mean "$SHIPPED" "$STEPS" "$CACHE" $OWN --model.shape-pooling mean &
 # shellcheck disable=SC2086
-calibrated_stage stage_keypoints "$SHIPPED" "$STEPS" "$CACHE" $OWN --model.shape-pooling keypoints &
+scored_further_stage stage_keypoints "$SHIPPED" "$STEPS" "$CACHE" $OWN --model.shape-pooling keypoints &
 wait
-for name in stage_mean stage_keypoints; do
-    val40 "$name" "$W/$name" &
-done
-wait
-for name in stage_mean stage_keypoints; do
-    test64 "$name" "$W/$name" &
-done
-wait
+.venv/bin/python benchmarks/collect_stages.py --work "$W" --names stage_mean stage_keypoints --compact \
+    --out "$W/keypoint_stage.json"

@@ -5,7 +5,8 @@
 # soft-argmax), from scratch, side by side, one core each, the same schedule and minutes; then both calibrated and
 # scored on val40 and on the 64 test objects (test64), side by side.
 #   DATA=... benchmarks/shape_pooling.sh      (SEED 0, the training seed of both runs; LIMIT minutes; STEPS: the
-#   schedule's length)
+#   schedule's length). Then, with both seeds scored: .venv/bin/python benchmarks/collect_stages.py --work W --names
+#   mean keypoints mean_s1 keypoints_s1 --compact --out benchmarks/results/shape_pooling.json
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
