@@ -7,8 +7,10 @@
 #   DATA=... [WORK=...] [STEPS=20500] benchmarks/retrain_preset.sh
 # REFERENCE: more weights scored by val40 after the pairs (for instance the old preset's first stage,
 # `git show 29fc4da:benchmarks/candidates/affnerf-small-sdf-v4.pt`). FURTHER_STEPS: also a further stage of that
-# many steps on one core (a fresh Adam 2e-4 -> 2e-5), calibrated and scored the same way. SKIP_TRAINING=1 only
-# evaluates. Writes W/retrain_preset.json: every score's metrics without confusion matrices.
+# many steps on one core (a fresh Adam FURTHER_LR -> 2e-5, FURTHER_LR 2e-4 unless set; STAGE_NPROC=2: on both cores
+# under torchrun), calibrated and scored the same way. SKIP_TRAINING=1 only calibrates and evaluates; SHIPPED_SCORES=0 leaves out
+# the shipped weights' val40 and test64 (the evaluation is deterministic: results/retrain_preset.json has them). Writes
+# W/retrain_preset.json: every score's metrics without confusion matrices.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -24,23 +26,31 @@ if [ "${SKIP_TRAINING:-0}" != 1 ]; then
     .venv/bin/torchrun --standalone --nproc_per_node 2 -m affnerf.cli.main train --data "$DATA" --out "$W/run" \
         --config small --steps "$STEPS" --device cpu --checkpoint-every 1000 --keep-checkpoints 3 --val-every 0 \
         --cache-dir "$W/cache" --no-progress
-    .venv/bin/affnerf eval calibrate --run "$W/run" --data "$DATA" --max-objects 32 --device cpu
 fi
+.venv/bin/affnerf eval calibrate --run "$W/run" --data "$DATA" --max-objects 32 --device cpu
 rm -rf "$W/val40_run" "$W/val40_shipped" "$W/test64_run" "$W/test64_shipped"
-val40 run "$W/run" &
-val40 shipped "$SHIPPED" &
-wait
-test64 run "$W/run" &
-test64 shipped "$SHIPPED" &
-wait
+names=(val40_run test64_run)
+if [ "${SHIPPED_SCORES:-1}" = 1 ]; then
+    val40 run "$W/run" &
+    val40 shipped "$SHIPPED" &
+    wait
+    test64 run "$W/run" &
+    test64 shipped "$SHIPPED" &
+    wait
+    names+=(val40_shipped test64_shipped)
+else
+    val40 run "$W/run" &
+    test64 run "$W/run" &
+    wait
+fi
 if [ "${FURTHER_STEPS:-0}" -gt 0 ]; then
-    scored_further_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0
+    scored_further_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0 \
+        --optim.lr "${FURTHER_LR:-2e-4}"
 fi
 if [ -n "${REFERENCE:-}" ]; then
     rm -rf "$W/val40_reference"
     val40 reference "$REFERENCE"
 fi
-names=(val40_run val40_shipped test64_run test64_shipped)
 [ "${FURTHER_STEPS:-0}" -gt 0 ] && names+=(val40_stage test64_stage)
 [ -n "${REFERENCE:-}" ] && names+=(val40_reference)
 merge_scores "$W/retrain_preset.json" "${names[@]}"

@@ -31,11 +31,15 @@ timed_small_run() {
 
 # calibrated_stage NAME INIT STEPS CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the weights INIT (a fresh
 # Adam, 2e-4 -> 2e-5 over STEPS steps, frames and points in CACHE), then its mesh level calibrated on 32 validation
-# objects (fine_tune_view_labels.sh, further_stage_outer_surface.sh, fine_tune_shared_field.sh).
+# objects (fine_tune_view_labels.sh, further_stage_outer_surface.sh, fine_tune_shared_field.sh). STAGE_NPROC=2
+# trains it as two single-threaded processes under torchrun (both cores, 8 objects a step each), as a first stage is.
 calibrated_stage() {
     local name=$1 init=$2 steps=$3 cache=$4
     shift 4
-    .venv/bin/affnerf train --data "$DATA" --out "$W/$name" --config small --steps "$steps" --init-from "$init" \
+    local train=(.venv/bin/affnerf train)
+    [ "${STAGE_NPROC:-1}" -gt 1 ] &&
+        train=(.venv/bin/torchrun --standalone --nproc_per_node "$STAGE_NPROC" -m affnerf.cli.main train)
+    "${train[@]}" --data "$DATA" --out "$W/$name" --config small --steps "$steps" --init-from "$init" \
         --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" --device cpu --no-progress "$@"
     .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
 }
