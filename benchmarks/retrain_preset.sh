@@ -7,10 +7,11 @@
 #   DATA=... [WORK=...] [STEPS=20500] benchmarks/retrain_preset.sh
 # REFERENCE: more weights scored by val40 after the pairs (for instance the old preset's first stage,
 # `git show 29fc4da:benchmarks/candidates/affnerf-small-sdf-v4.pt`). FURTHER_STEPS: also a further stage of that
-# many steps on one core (a fresh Adam FURTHER_LR -> 2e-5, FURTHER_LR 2e-4 unless set; STAGE_NPROC=2: on both cores
-# under torchrun), calibrated and scored the same way. SKIP_TRAINING=1 only calibrates and evaluates; SHIPPED_SCORES=0 leaves out
-# the shipped weights' val40 and test64 (the evaluation is deterministic: results/retrain_preset.json has them). Writes
-# W/retrain_preset.json: every score's metrics without confusion matrices.
+# many steps on one core (a fresh Adam FURTHER_LR -> 2e-5, FURTHER_LR 2e-4 unless set; STAGE_NPROC=2: on both
+# cores under torchrun), calibrated and scored the same way. SKIP_TRAINING=1 only calibrates and evaluates;
+# SHIPPED_SCORES=0 leaves out the shipped weights' val40 and test64 (the evaluation is deterministic:
+# results/retrain_preset.json has them). Writes W/retrain_preset.json: every score's metrics without confusion
+# matrices.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"

@@ -37,8 +37,9 @@ calibrated_stage() {
     local name=$1 init=$2 steps=$3 cache=$4
     shift 4
     local train=(.venv/bin/affnerf train)
-    [ "${STAGE_NPROC:-1}" -gt 1 ] &&
+    if [ "${STAGE_NPROC:-1}" -gt 1 ]; then
         train=(.venv/bin/torchrun --standalone --nproc_per_node "$STAGE_NPROC" -m affnerf.cli.main train)
+    fi
     "${train[@]}" --data "$DATA" --out "$W/$name" --config small --steps "$steps" --init-from "$init" \
         --optim.lr 2e-4 --optim.lr-final 2e-5 --cache-dir "$cache" --device cpu --no-progress "$@"
     .venv/bin/affnerf eval calibrate --run "$W/$name" --data "$DATA" --max-objects 32 --device cpu
