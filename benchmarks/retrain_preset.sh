@@ -31,19 +31,15 @@ fi
 .venv/bin/affnerf eval calibrate --run "$W/run" --data "$DATA" --max-objects 32 --device cpu
 rm -rf "$W/val40_run" "$W/val40_shipped" "$W/test64_run" "$W/test64_shipped"
 names=(val40_run test64_run)
+val40 run "$W/run" &
 if [ "${SHIPPED_SCORES:-1}" = 1 ]; then
-    val40 run "$W/run" &
     val40 shipped "$SHIPPED" &
     wait
-    test64 run "$W/run" &
     test64 shipped "$SHIPPED" &
-    wait
     names+=(val40_shipped test64_shipped)
-else
-    val40 run "$W/run" &
-    test64 run "$W/run" &
-    wait
 fi
+test64 run "$W/run" &
+wait
 if [ "${FURTHER_STEPS:-0}" -gt 0 ]; then
     scored_further_stage stage "$W/run" "$FURTHER_STEPS" "$W/cache" --checkpoint-every 1000 --val-every 0 \
         --optim.lr "${FURTHER_LR:-2e-4}"
