@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Reproduce the committed Table 2 / Table 3 results and the shipped model (benchmarks/results/, MODEL_CARD.md).
 # These are the commands that made them on the 2-core CPU machine (about 4 hours there; the shipped model trains as two
-# single-threaded processes under torchrun, one per core; the other trainings run single-threaded, two side by side).
+# single-threaded processes under torchrun, one per core, 81 min on the VM with AVX-512 of 2026-12-05; the other
+# trainings run single-threaded, two side by side).
 # Every step is resumable: rerun after an interruption.
 # The ablation ladder that chose the recipe is benchmarks/ablation_ladder.py (benchmarks/README.md).
 # On a GPU machine set DEVICE=cuda and raise the steps; the time limits only cap a CPU session.
@@ -12,19 +13,20 @@ W="${WORK:-benchmarks/.work/tables}"
 R="benchmarks/results"
 DEVICE="${DEVICE:-cpu}"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
-STEPS="${STEPS:-29500}"           # AFF-NeRF, small configuration, all eight categories (83 min)
+STEPS="${STEPS:-34000}"           # AFF-NeRF, small configuration, all eight categories (81 min)
 NPROC="${NPROC:-2}"               # its processes (DistributedDataParallel, gloo on CPUs); 1 on a single GPU
 PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views), the full-protocol run (38 min)
 # the three posed baselines of the shared protocol, each 27 minutes of one core at most (their steps fill it)
 BASE_STEPS="${BASE_STEPS:-pixelnerf:4500 semantic-ray:2400 gsnerf:2300}"
 LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (48 min of one core, beside another run)
 LOCO_BASE_STEPS="${LOCO_BASE_STEPS:-pixelnerf:1500 semantic-ray:800 gsnerf:780}"  # and the baselines', 9 min each
-# the shipped model and the leave-one-out runs were trained with the small preset as it was until the evening of
-# 2026-11-28 (a coarse field of its own), 2026-11-29 (Adam's exponential fall from 1e-3, no warm-up), 2026-12-01
-# (no rays drawn near the outline) and 2026-12-05 (a shape encoder that only averages its features)
+# the shipped model (since 2026-12-05) is the small preset as it is; the leave-one-out runs and the weights shipped
+# before were trained with it as it was until the evening of 2026-11-28 (a coarse field of its own), 2026-11-29
+# (Adam's exponential fall from 1e-3, no warm-up), 2026-12-01 (no rays drawn near the outline) and 2026-12-05 (a
+# shape encoder that only averages its features)
 OLD_FIELD="--model.coarse-field own --optim.schedule exponential --optim.warmup-steps 0 --outline-fraction 0"
 OLD_FIELD="$OLD_FIELD --model.shape-pooling mean"
-SHIPPED_RECIPE="$OLD_FIELD --optim.lr 1e-3"
+SHIPPED_RECIPE="$OLD_FIELD --optim.lr 1e-3"   # the recipe before, kept for the leave-one-out runs and the baselines
 # the posed baselines' committed rows were trained with the small preset as it was before 2026-11-26
 OLD_SMALL="$SHIPPED_RECIPE --objects-per-step 4 --points-per-object 1024 --optim.lr-final 1e-4"
 EVAL="--scale 0.5 --target-views 20 --max-objects 5 --device $DEVICE"
@@ -39,16 +41,12 @@ all_but() { python3 -c "import sys; c='screwdriver pen scissors eyeglasses bucke
 $A data generate --out "$W/data" --objects-per-category 80 --views 30 --workers 2 --seed 0
 
 # 2. training (on the CPU machine these ran two at a time, stopped by their time limits: see MODEL_CARD.md)
-# the shipped model (a signed-distance field, the preset since 2026-11-28): one schedule (1e-3 -> 2e-5) over 29,500
-# steps, 8 objects a step on each process (16 in all)
+# the shipped model: the preset as it is (a signed-distance field, one field, keypoints in the shape code, 40 % of
+# the rays near the outline), one cosine schedule (2e-3 -> 2e-5 after 300 warm-up steps) over 34,000 steps, 8
+# objects a step on each process (16 in all); benchmarks/retrain_preset.sh, benchmarks/results/retrain_keypoints.md
 .venv/bin/torchrun --standalone --nproc_per_node "$NPROC" -m affnerf.cli.main train --data "$W/data" --out "$W/affnerf" \
-    --config small $SHIPPED_RECIPE --steps "$STEPS" --time-limit 90 --device "$DEVICE" --checkpoint-every 1000 \
-    --keep-checkpoints 4 --val-every 0 $(resume "$W/affnerf")
-# then a further stage from those weights on one process (the committed run: one core, beside a leave-one-out run,
-# 51 min; benchmarks/results/sdf_recipe.md): a fresh Adam, 2e-4 -> 2e-5 over 19,000 steps
-$A train --data "$W/data" --out "$W/affnerf-stage2" --config small $OLD_FIELD --steps 19000 --time-limit 55 --device "$DEVICE" \
-    --checkpoint-every 1000 --keep-checkpoints 4 --val-every 0 --init-from "$W/affnerf" --optim.lr 2e-4 \
-    --optim.lr-final 2e-5 $(resume "$W/affnerf-stage2")
+    --config small --steps "$STEPS" --device "$DEVICE" --checkpoint-every 1000 --keep-checkpoints 4 --val-every 0 \
+    $(resume "$W/affnerf")
 $A train --data "$W/data" --out "$W/pixelnerf-full" --config small $OLD_SMALL --steps "$PIX_STEPS" --time-limit 38 \
     --device "$DEVICE" --model.kind pixelnerf --input-views 3 $(resume "$W/pixelnerf-full")
 for kind_steps in $BASE_STEPS; do
@@ -68,8 +66,8 @@ for held in teapot scissors; do
 done
 
 # 3. the shipped model: mesh level and per-object optical depth from validation F-score (32 objects), then exported
-$A eval calibrate --run "$W/affnerf-stage2" --data "$W/data" --max-objects 32 --device "$DEVICE"
-.venv/bin/python -m affnerf.predict.shipped "$W/affnerf-stage2" src/affnerf/weights/affnerf-small.pt
+$A eval calibrate --run "$W/affnerf" --data "$W/data" --max-objects 32 --device "$DEVICE"
+.venv/bin/python -m affnerf.predict.shipped "$W/affnerf" src/affnerf/weights/affnerf-small.pt
 
 # mesh levels of the other runs, each on its own training categories' validation objects
 for run in pixelnerf semantic-ray gsnerf; do

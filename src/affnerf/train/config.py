@@ -196,19 +196,17 @@ PAPER = TrainConfig(data=Path("."), out=Path("."))
 #: CDF of it (results/sdf_geometry.md: +0.044 validation mIoU, +0.065 F@1cm at equal time); the other options of the
 #: quality work, FiLM, mask/depth losses, class balancing, input jitter and triplanes, stay off: they did not pay at
 #: equal time. More objects a step at the same rays and points pays at equal time (results/batch_shape.md: 16
-#: objects 0.607 against 4 objects' 0.565 validation mIoU); 29,500 steps are about 83 minutes of two
-#: single-threaded processes (torchrun) on 2 cores (results/sdf_recipe.md). One field places its own fine samples
-#: (coarse_field "shared"): a step 17-23 % cheaper, the same learning per step (results/shared_field.md, two seeds);
-#: the shipped weights were trained before that with two fields (--model.coarse-field own, MODEL_CARD.md). Of a
-#: step's rays 40 % are drawn near the object's outline instead of uniformly (results/outline_rays.md, two seeds);
-#: the shipped weights predate that too. The shape encoder also codes where its features peak in the crop
-#: (shape_pooling "keypoints", a spatial soft-argmax; results/shape_pooling.md, two seeds: +0.015 mIoU, +0.019 F@1cm
-#: on average over validation and test objects at equal steps and time); the shipped weights average only
-#: (--model.shape-pooling mean).
+#: objects 0.607 against 4 objects' 0.565 validation mIoU); 34,000 steps are 81 minutes of two single-threaded
+#: processes (torchrun) on a 2-core VM with AVX-512 (results/retrain_keypoints.md: the shipped model since
+#: 2026-12-05). One field places its own fine samples (coarse_field "shared"): a step 17-23 % cheaper, the same
+#: learning per step (results/shared_field.md, two seeds). Of a step's rays 40 % are drawn near the object's outline
+#: instead of uniformly (results/outline_rays.md, two seeds). The shape encoder also codes where its features peak
+#: in the crop (shape_pooling "keypoints", a spatial soft-argmax; results/shape_pooling.md, two seeds: +0.015 mIoU,
+#: +0.019 F@1cm on average over validation and test objects at equal steps and time).
 SMALL = replace(
     PAPER,
     config="small",
-    steps=29_500,
+    steps=34_000,
     model=ModelConfig(
         encoder_width=0.25,
         encoder_resolution=64,
