@@ -10,7 +10,7 @@
 # many steps on one core (a fresh Adam FURTHER_LR -> 2e-5, FURTHER_LR 2e-4 unless set; STAGE_NPROC=2: on both
 # cores under torchrun), calibrated and scored the same way. SKIP_TRAINING=1 only calibrates and evaluates;
 # SHIPPED_SCORES=0 leaves out the shipped weights' val40 and test64 (the evaluation is deterministic:
-# results/retrain_preset.json has them). Writes W/retrain_preset.json: every score's metrics without confusion
+# results/retrain_keypoints.json has those of the weights shipped since 2026-12-05, retrain_preset.json the ones before). Writes W/retrain_preset.json: every score's metrics without confusion
 # matrices.
 set -euo pipefail
 cd "$(dirname "$0")/.."
