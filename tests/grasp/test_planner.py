@@ -11,7 +11,7 @@ import torch
 import trimesh
 
 from affnerf.cli.main import main
-from affnerf.grasp.gripper import ParallelJawGripper
+from affnerf.grasp.gripper import ParallelJawGripper, grasp_pose
 from affnerf.grasp.planner import (
     PlanConfig,
     collides,
@@ -165,6 +165,26 @@ def test_planned_grasps_are_valid_and_collision_free(screwdriver):
         local = (g.contacts - g.pose[:3, 3]) @ g.pose[:3, :3]
         assert local[0, 0] < 0 < local[1, 0]
         assert abs((local[1, 0] - local[0, 0]) - g.width) < 1.5e-3  # contacts are patch centres, width the first touch
+
+
+def test_the_collision_check_agrees_with_testing_every_point_in_every_solid():
+    rng = np.random.default_rng(3)
+    gripper = ParallelJawGripper()
+    points = rng.uniform(-0.15, 0.15, (4000, 3))
+    centres = rng.uniform(-0.1, 0.1, (200, 3))
+    poses = np.stack([grasp_pose(c, rng.normal(size=3), rng.normal(size=3)) for c in centres])
+    widths = rng.uniform(0.0, gripper.max_opening, 200)
+    expected = np.zeros(200, bool)
+    for i, (pose, width) in enumerate(zip(poses, widths, strict=True)):
+        local = (points - pose[:3, 3]) @ pose[:3, :3]
+        for centre, half in gripper.boxes(width):
+            expected[i] |= np.all(np.abs(local - centre) < half - 0.001, axis=1).any()
+            corners = centre + half * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+            assert np.linalg.norm(corners, axis=1).max() <= gripper.reach(width) + 1e-12
+    assert 0 < expected.sum() < 200
+    assert np.array_equal(collides(poses, widths, gripper, points, tolerance=0.001, chunk=16), expected)
+    assert not collides(poses[:0], widths[:0], gripper, points, 0.001).any()
+    assert not collides(poses, widths, gripper, points[:0], 0.001).any()
 
 
 def test_local_search_lowers_the_energy(screwdriver):

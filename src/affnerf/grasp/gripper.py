@@ -51,6 +51,11 @@ class ParallelJawGripper:
         )
         return [finger1, finger2, palm]
 
+    def reach(self, width: float) -> float:
+        """How far the solids at an opening ``width`` reach from the grasp centre: the distance to their farthest
+        corner, metres (nothing farther can touch them)."""
+        return max(float(np.linalg.norm(np.abs(centre) + half)) for centre, half in self.boxes(width))
+
     def meshes(self, width: float) -> list[trimesh.Trimesh]:
         """Box meshes of the fingers and palm at ``width``, in the grasp frame."""
         out = []

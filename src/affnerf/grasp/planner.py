@@ -214,20 +214,40 @@ def collides(
     gripper: ParallelJawGripper,
     points: np.ndarray,
     tolerance: float,
-    chunk: int = 32,
+    chunk: int = 64,
 ) -> np.ndarray:
     """(G,) whether the gripper (at each opening) cuts into the object: surface points (P, 3) deeper than
-    ``tolerance`` inside a finger or the palm."""
+    ``tolerance`` inside a finger or the palm. Only the points within the gripper's reach of each grasp centre
+    (:meth:`ParallelJawGripper.reach`, a k-d tree query) are transformed and tested.
+
+    Args:
+        poses: (G, 4, 4) grasp frames; widths: (G,) openings, metres; points: (P, 3).
+    """
     hit = np.zeros(len(poses), bool)
+    if not len(poses) or not len(points):
+        return hit
+    tree = cKDTree(points)
     for start in range(0, len(poses), chunk):
-        pose = poses[start : start + chunk]
-        local = np.einsum("gji,gpj->gpi", pose[:, :3, :3], points[None] - pose[:, None, :3, 3])  # (g, P, 3)
-        for k in range(3):
-            boxes = [gripper.boxes(w)[k] for w in widths[start : start + chunk]]
-            centre = np.stack([b[0] for b in boxes])[:, None]
-            half = np.stack([b[1] for b in boxes])[:, None]
-            hit[start : start + chunk] |= np.all(np.abs(local - centre) < half - tolerance, axis=2).any(axis=1)
+        pose, width = poses[start : start + chunk], widths[start : start + chunk]
+        near = tree.query_ball_point(pose[:, :3, 3], np.array([gripper.reach(w) for w in width]))
+        counts = np.fromiter((len(n) for n in near), dtype=np.intp, count=len(near))
+        if not counts.any():
+            continue
+        owner = np.repeat(np.arange(len(pose)), counts)
+        local = np.einsum(
+            "nji,nj->ni", pose[owner, :3, :3], points[np.concatenate(near).astype(np.intp)] - pose[owner, :3, 3]
+        )
+        inside = np.zeros(len(owner), bool)
+        for centre, half in _solids(gripper, width):
+            inside |= np.all(np.abs(local - centre[owner]) < half[owner] - tolerance, axis=1)
+        hit[start + owner[inside]] = True
     return hit
+
+
+def _solids(gripper: ParallelJawGripper, widths: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The gripper's boxes at each opening: per solid (finger 1, finger 2, palm), centres and half extents (G, 3)."""
+    boxes = [gripper.boxes(w) for w in widths]
+    return [(np.stack([b[k][0] for b in boxes]), np.stack([b[k][1] for b in boxes])) for k in range(3)]
 
 
 def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, angle_deg: float = 15.0) -> list[int]:
@@ -317,10 +337,10 @@ def _plan_on(obj: GraspObject, mask: np.ndarray | None, config: PlanConfig, grip
     poses = np.stack([grasp_pose(c, a, r) for c, a, r in zip(centres, axes, approaches, strict=True)])
     contacts = close_jaws(obj, poses, gripper)
     check_points = np.concatenate([obj.sample_surface(config.surface_samples, rng)[0], obj.vertices])
-    valid = contacts.valid & ~collides(poses, contacts.width, gripper, check_points, config.collision_tolerance)
-    valid &= contacts.width <= gripper.max_opening - config.width_clearance
+    valid = contacts.valid & (contacts.width <= gripper.max_opening - config.width_clearance)
     if mask is not None:
         valid &= mask[np.maximum(contacts.faces, 0)].all(axis=1)
+    valid[valid] = ~collides(poses[valid], contacts.width[valid], gripper, check_points, config.collision_tolerance)
     kept, epsilon, hold = _rank(obj, replace(contacts, valid=valid), poses, config)
     return [
         Grasp(
