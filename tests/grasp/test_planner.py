@@ -182,7 +182,7 @@ def test_the_collision_check_agrees_with_testing_every_point_in_every_solid():
             corners = centre + half * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
             assert np.linalg.norm(corners, axis=1).max() <= gripper.reach(width) + 1e-12
     assert 0 < expected.sum() < 200
-    assert np.array_equal(collides(poses, widths, gripper, points, tolerance=0.001, chunk=16), expected)
+    assert np.array_equal(collides(poses, widths, gripper, points, tolerance=0.001), expected)
     assert not collides(poses[:0], widths[:0], gripper, points, 0.001).any()
     assert not collides(poses, widths, gripper, points[:0], 0.001).any()
 

@@ -209,16 +209,11 @@ def _approaches(axes: np.ndarray, per_pair: int, rng: np.random.Generator) -> np
 
 
 def collides(
-    poses: np.ndarray,
-    widths: np.ndarray,
-    gripper: ParallelJawGripper,
-    points: np.ndarray,
-    tolerance: float,
-    chunk: int = 64,
+    poses: np.ndarray, widths: np.ndarray, gripper: ParallelJawGripper, points: np.ndarray, tolerance: float
 ) -> np.ndarray:
     """(G,) whether the gripper (at each opening) cuts into the object: surface points (P, 3) deeper than
     ``tolerance`` inside a finger or the palm. Only the points within the gripper's reach of each grasp centre
-    (:meth:`ParallelJawGripper.reach`, a k-d tree query) are transformed and tested.
+    (:meth:`ParallelJawGripper.reach`, a k-d tree query) are tested.
 
     Args:
         poses: (G, 4, 4) grasp frames; widths: (G,) openings, metres; points: (P, 3).
@@ -226,28 +221,14 @@ def collides(
     hit = np.zeros(len(poses), bool)
     if not len(poses) or not len(points):
         return hit
-    tree = cKDTree(points)
-    for start in range(0, len(poses), chunk):
-        pose, width = poses[start : start + chunk], widths[start : start + chunk]
-        near = tree.query_ball_point(pose[:, :3, 3], np.array([gripper.reach(w) for w in width]))
-        counts = np.fromiter((len(n) for n in near), dtype=np.intp, count=len(near))
-        if not counts.any():
+    reach = np.array([gripper.reach(w) for w in widths])
+    near = cKDTree(points).query_ball_point(poses[:, :3, 3], reach)
+    for i, (pose, width, index) in enumerate(zip(poses, widths, near, strict=True)):
+        if not index:
             continue
-        owner = np.repeat(np.arange(len(pose)), counts)
-        local = np.einsum(
-            "nji,nj->ni", pose[owner, :3, :3], points[np.concatenate(near).astype(np.intp)] - pose[owner, :3, 3]
-        )
-        inside = np.zeros(len(owner), bool)
-        for centre, half in _solids(gripper, width):
-            inside |= np.all(np.abs(local - centre[owner]) < half[owner] - tolerance, axis=1)
-        hit[start + owner[inside]] = True
+        local = (points[index] - pose[:3, 3]) @ pose[:3, :3]  # (n, 3) in the grasp frame
+        hit[i] = any(np.all(np.abs(local - c) < h - tolerance, axis=1).any() for c, h in gripper.boxes(width))
     return hit
-
-
-def _solids(gripper: ParallelJawGripper, widths: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The gripper's boxes at each opening: per solid (finger 1, finger 2, palm), centres and half extents (G, 3)."""
-    boxes = [gripper.boxes(w) for w in widths]
-    return [(np.stack([b[k][0] for b in boxes]), np.stack([b[k][1] for b in boxes])) for k in range(3)]
 
 
 def _suppress(poses: np.ndarray, order: np.ndarray, distance: float = 0.004, angle_deg: float = 15.0) -> list[int]:
