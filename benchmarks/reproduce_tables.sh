@@ -20,7 +20,7 @@ PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views), the fu
 BASE_STEPS="${BASE_STEPS:-pixelnerf:4500 semantic-ray:2400 gsnerf:2300}"
 LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (48 min of one core, beside another run)
 # (their *_preset_2026-12-05 results: the same command without $SHIPPED_RECIPE, --steps 14000 --time-limit 55, stopped
-# at 12,036 and 11,915 steps beside other jobs; calibrated as in step 6b)
+# at 12,036 and 11,915 steps beside other jobs, then resumed to 14,000; calibrated as in step 6b)
 LOCO_BASE_STEPS="${LOCO_BASE_STEPS:-pixelnerf:1500 semantic-ray:800 gsnerf:780}"  # and the baselines', 9 min each
 # the shipped model (since 2026-12-05) is the small preset as it is; the leave-one-out runs and the weights shipped
 # before were trained with it as it was until the evening of 2026-11-28 (a coarse field of its own), 2026-11-29
