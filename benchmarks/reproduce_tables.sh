@@ -149,7 +149,7 @@ done
 #    with the shipped model (its meshes fitted to their input view: --fit-steps 30, the default) and the planner's
 #    default 1 cm part margin (chosen on validation objects by
 #    benchmarks/grasp_margin.py), the predicted part planned first where the prediction before the fit agrees;
-#    its objects in two single-threaded worker processes (--workers 2, the default), 10 min 22 s on 2 cores; the
+#    its objects in two single-threaded worker processes (--workers 2, the default), 8.2 min on 2 cores (VM with AVX-512); the
 #    numbers do not depend on the worker or core count (README, Table 3, "Reruns")
 $A eval grasp --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --out "$W/grasps" --max-objects 5 --device "$DEVICE"
 
