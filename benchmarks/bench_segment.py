@@ -36,7 +36,6 @@ from typing import Any
 
 import numpy as np
 from PIL import Image
-from scipy import ndimage
 
 from affnerf.data.dataset import ObjectData
 from affnerf.environment import describe_machine
@@ -53,9 +52,9 @@ from bench_composites import (  # noqa: E402
 )
 
 THRESHOLDS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
-#: A true mask's thin parts: what an opening by a disk of this radius (pixels) removes; objects with fewer than
-#: MIN_THIN_PIXELS of them are left out of the thin-part recall.
-THIN_RADIUS = 3
+#: A true mask's thin parts: where a disc of this radius × the canvas's larger side (3 px of 400) does not fit
+#: (``grabcut.thin_parts``); objects with fewer than MIN_THIN_PIXELS such pixels are left out of the thin-part recall.
+THIN_RADIUS = 0.0075
 MIN_THIN_PIXELS = 20
 
 
@@ -118,17 +117,11 @@ def measure_segmenter(
     return iou, secs, {"segmenter_sweep": sweep, "segmenter_confidence": segnet.mask_confidence(prob, mask)}
 
 
-def thin_parts(truth: np.ndarray, radius: int = THIN_RADIUS) -> np.ndarray:
-    """(H, W) bool: the pixels of the true mask (H, W) that an opening by a disk of ``radius`` pixels removes, its
-    parts narrower than about ``2 * radius + 1`` pixels (a shaft, a bail, a blade's tip)."""
-    yy, xx = np.mgrid[-radius : radius + 1, -radius : radius + 1]
-    return truth & ~ndimage.binary_opening(truth, structure=xx**2 + yy**2 <= radius**2)
-
-
 def thin_recall(found: np.ndarray, truth: np.ndarray) -> float | None:
-    """Share of the true mask's thin parts (:func:`thin_parts`) that the found mask covers; None when the object
-    has fewer than :data:`MIN_THIN_PIXELS` such pixels. IoU barely notices a lost shaft; this does."""
-    thin = thin_parts(truth)
+    """Share of the true mask's thin parts (``grabcut.thin_parts`` at :data:`THIN_RADIUS`) that the found mask
+    covers; None when the object has fewer than :data:`MIN_THIN_PIXELS` such pixels. IoU barely notices a lost shaft;
+    this does."""
+    thin = grabcut.thin_parts(truth, THIN_RADIUS)
     return None if thin.sum() < MIN_THIN_PIXELS else float((found & thin).sum() / thin.sum())
 
 
@@ -195,7 +188,7 @@ def summarise(rows: list[dict]) -> dict[str, Any]:
         }
     thin = [r["auto_thin_recall"] for r in rows if r.get("auto_thin_recall") is not None]
     out["auto_thin_part_recall"] = {"mean": mean(thin) if thin else None, "composites": len(thin),
-                                    "radius_px": THIN_RADIUS}  # fmt: skip
+                                    "radius_px": round(THIN_RADIUS * max(CANVAS))}  # fmt: skip
     out["salient_threshold_sweep"] = {str(t): mean([r["sweep"][t] for r in rows]) for t in THRESHOLDS}
     if "segmenter_sweep" in rows[0]:
         out["segmenter_threshold_sweep"] = {str(t): mean([r["segmenter_sweep"][t] for r in rows]) for t in THRESHOLDS}

@@ -213,7 +213,7 @@ def collides(
 ) -> np.ndarray:
     """(G,) whether the gripper (at each opening) cuts into the object: surface points (P, 3) deeper than
     ``tolerance`` inside a finger or the palm. Only the points within the gripper's reach of each grasp centre
-    (:meth:`ParallelJawGripper.reach`, a k-d tree query) are tested.
+    (:meth:`ParallelJawGripper.reach` at the widest opening, a k-d tree query) are tested.
 
     Args:
         poses: (G, 4, 4) grasp frames; widths: (G,) openings, metres; points: (P, 3).
@@ -221,8 +221,7 @@ def collides(
     hit = np.zeros(len(poses), bool)
     if not len(poses) or not len(points):
         return hit
-    reach = np.array([gripper.reach(w) for w in widths])
-    near = cKDTree(points).query_ball_point(poses[:, :3, 3], reach)
+    near = cKDTree(points).query_ball_point(poses[:, :3, 3], gripper.reach(float(widths.max())))
     for i, (pose, width, index) in enumerate(zip(poses, widths, near, strict=True)):
         if not index:
             continue

@@ -97,6 +97,18 @@ def _disc(mask_shape: tuple[int, ...], band: float) -> np.ndarray:
     return np.hypot(*np.mgrid[-r : r + 1, -r : r + 1]) <= r
 
 
+def thin_parts(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(H, W) bool: the pixels of the (H, W) bool ``mask`` where a disc of ``radius`` × the image's larger side (at
+    least 2 px) does not fit inside it, its thin parts (a shaft, a bail, a blade's tip).
+
+    Example:
+        >>> m = np.zeros((100, 100), bool); m[20:60, 20:60] = True; m[38:42, 60:95] = True
+        >>> bool(thin_parts(m, 0.03)[40, 80]), bool(thin_parts(m, 0.03)[40, 40])
+        (True, False)
+    """
+    return mask & ~ndimage.binary_opening(mask, _disc(mask.shape, radius))
+
+
 def trimap(mask: np.ndarray, band: float = TRIMAP_BAND) -> np.ndarray:
     """(H, W) uint8 GrabCut labels of an (H, W) bool mask: sure object inside, sure background outside, and unsure
     (probably as the mask says) in a band of ``band`` of the image's larger side around the mask's edge."""
@@ -134,7 +146,7 @@ def probability_trimap(
     labels = trimap(mask, band)
     labels[(labels == 0) & (prob >= sure_background)] = 2  # GC_BGD -> GC_PR_BGD
     if sure_object is not None:
-        thin = mask if thin_radius is None else mask & ~ndimage.binary_opening(mask, _disc(mask.shape, thin_radius))
+        thin = mask if thin_radius is None else thin_parts(mask, thin_radius)
         labels[thin & (prob >= sure_object)] = 1  # GC_FGD
     return labels
 
