@@ -137,3 +137,24 @@ def test_training_from_an_ensemble_is_refused_naming_the_file(train_dataset, tra
     with pytest.raises(AffnerfError, match="two.pt: an ensemble of 2 segmenters"):
         segmenter.train_segmenter(cfg)
     assert not cfg.out.exists()
+
+
+def test_thin_parts_weigh_more_in_the_cross_entropy_and_the_bulk_does_not():
+    masks = torch.zeros(1, 1, 24, 24)
+    masks[..., 4:16, 4:16] = 1.0  # a handle
+    masks[..., 9:11, 16:23] = 1.0  # a shaft two pixels wide
+    weights = segmenter.thin_part_weights(masks, 2, 4.0)
+    assert (weights[..., 9:11, 16:23] == 5.0).all() and (weights[..., 6:14, 6:14] == 1.0).all()
+    assert (weights[masks == 0] == 1.0).all()
+    logits = torch.full_like(masks, -1.0)  # the same wrong answer everywhere on the object
+    plain, weighted = segmenter.pixel_bce(logits, masks), segmenter.pixel_bce(logits, masks, weights)
+    bce = torch.nn.functional.binary_cross_entropy_with_logits(logits, masks, reduction="none")
+    assert float(weighted - plain) == pytest.approx(4.0 * float(bce[..., 9:11, 16:23].sum()) / 24**2, rel=1e-5)
+
+
+def test_a_run_with_thin_parts_weighted_trains(train_dataset, trained_segmenter, tmp_path):
+    cfg = segmenter.SegmenterTrainConfig(
+        data=train_dataset, out=tmp_path / "thin.pt", steps=2, batch=2, pool=4, val_photos=2, thin_weight=4.0,
+        init=trained_segmenter,
+    )  # fmt: skip
+    assert segmenter.train_segmenter(cfg)["steps_done"] == 2 and cfg.out.exists()

@@ -74,6 +74,12 @@ class SegmenterTrainConfig:
             of a trained segmenter): those are drawn with a probability proportional to the loss each photo had when
             last drawn (photos not drawn yet count as the mean of those that were), the rest of the batch uniformly
             as usual. 0 = every draw uniform (the earlier stages' rule, draw for draw).
+        thin_weight: extra weight of the true mask's thin parts (a shaft, a bail, a temple of eyeglasses: where a
+            square of side 2 × ``thin_radius`` × the photo's larger side does not fit in the mask) in every
+            cross-entropy term: those pixels count ``1 + thin_weight`` times. They are a small share of the photo,
+            so a network that drops them loses little loss and little IoU, but they carry the labels that tell a
+            screwdriver from a bucket (``benchmarks/results/segmenter_u2netp.md``, "Thin parts weighted"). 0 = none.
+        thin_radius: the half-side of that square, a share of the training photo's larger side.
         network: the network's shape.
     """
 
@@ -93,6 +99,8 @@ class SegmenterTrainConfig:
     subjects: int = 0
     precision: Precision = "fp32"
     hard_share: float = 0.0
+    thin_weight: float = 0.0
+    thin_radius: float = 0.0125
     network: SegmenterConfig = SegmenterConfig()
 
 
@@ -193,28 +201,47 @@ def learning_rate(peak: float, step: int, steps: int) -> float:
     return cosine_fall(peak, 0.05 * peak, step / steps)
 
 
-def pixel_bce(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """(N,) binary cross-entropy of (N, 1, H, W) logits against 0/1 masks, averaged over each photo's pixels."""
-    return F.binary_cross_entropy_with_logits(logits, masks, reduction="none").mean(dim=(1, 2, 3))
+def thin_part_weights(masks: torch.Tensor, radius: int, weight: float) -> torch.Tensor:
+    """(N, 1, H, W) pixel weights of (N, 1, H, W) 0/1 masks: ``1 + weight`` on the masks' thin parts (the pixels an
+    opening by a square of side ``2 * radius + 1`` removes), 1 elsewhere.
+
+    Example:
+        >>> m = torch.zeros(1, 1, 12, 12); m[..., 2:10, 2:8] = 1; m[..., 5, 8:12] = 1
+        >>> w = thin_part_weights(m, 1, 3.0)
+        >>> w[0, 0, 5, 10].item(), w[0, 0, 5, 4].item(), w[0, 0, 0, 0].item()
+        (4.0, 1.0, 1.0)
+    """
+    k = 2 * radius + 1
+    opened = F.max_pool2d(-F.max_pool2d(-masks, k, 1, radius), k, 1, radius)
+    return 1.0 + weight * masks * (1.0 - opened)
 
 
-def photo_losses(logits: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
-    """(N,) binary cross-entropy plus soft Dice (1 - 2|P∩M| / (|P| + |M|)) of each photo's (N, 1, H, W) logits
-    against its 0/1 mask."""
+def pixel_bce(logits: torch.Tensor, masks: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
+    """(N,) binary cross-entropy of (N, 1, H, W) logits against 0/1 masks, averaged over each photo's pixels, each
+    pixel counted ``weights`` ((N, 1, H, W), or 1) times."""
+    bce = F.binary_cross_entropy_with_logits(logits, masks, reduction="none")
+    return (bce if weights is None else bce * weights).mean(dim=(1, 2, 3))
+
+
+def photo_losses(logits: torch.Tensor, masks: torch.Tensor, weights: torch.Tensor | None = None) -> torch.Tensor:
+    """(N,) binary cross-entropy (pixels weighted by ``weights``, see :func:`pixel_bce`) plus soft Dice
+    (1 - 2|P∩M| / (|P| + |M|)) of each photo's (N, 1, H, W) logits against its 0/1 mask."""
     p = torch.sigmoid(logits)
     inter = (p * masks).sum(dim=(1, 2, 3))
     dice = 1.0 - (2.0 * inter + 1.0) / (p.sum(dim=(1, 2, 3)) + masks.sum(dim=(1, 2, 3)) + 1.0)
-    return pixel_bce(logits, masks) + dice
+    return pixel_bce(logits, masks, weights) + dice
 
 
-def step_losses(model: Segmenter, images: torch.Tensor, masks: torch.Tensor) -> torch.Tensor:
+def step_losses(
+    model: Segmenter, images: torch.Tensor, masks: torch.Tensor, weights: torch.Tensor | None = None
+) -> torch.Tensor:
     """(N,) training loss of each photo of a batch: :func:`photo_losses` of the output, and for U²-Net-p also the
-    mean binary cross-entropy of its six side outputs (its deep supervision)."""
+    mean binary cross-entropy of its six side outputs (its deep supervision); pixels weighted by ``weights``."""
     if not isinstance(model, SalientSegmenter):
-        return photo_losses(model(images), masks)
+        return photo_losses(model(images), masks, weights)
     fused, sides = model.side_logits(images)
-    side_bce = torch.stack([pixel_bce(s.float(), masks) for s in sides]).mean(dim=0)
-    return photo_losses(fused.float(), masks) + side_bce
+    side_bce = torch.stack([pixel_bce(s.float(), masks, weights) for s in sides]).mean(dim=0)
+    return photo_losses(fused.float(), masks, weights) + side_bce
 
 
 def draw_batch(last_loss: torch.Tensor, batch: int, hard_share: float, g: torch.Generator) -> torch.Tensor:
@@ -279,6 +306,7 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
     val = make_pool(load_cutouts(dataset, "val", 2, rng), photos, cfg.val_photos, size, rng, subjects)
     logger.info("pool of %d photos (+%d validation) in %.0f s", cfg.pool, cfg.val_photos, time.perf_counter() - start)
     model.train()
+    thin_px = max(1, round(cfg.thin_radius * max(size)))
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=1e-4)
     curve, step, loss = [], 0, torch.zeros(())
     last_loss = torch.full((cfg.pool,), float("nan"))
@@ -289,8 +317,9 @@ def train_segmenter(cfg: SegmenterTrainConfig) -> dict:
             group["lr"] = learning_rate(cfg.lr, step, cfg.steps)
         pick = draw_batch(last_loss, cfg.batch, cfg.hard_share, g)
         x, m = augment_batch(train[0][pick], train[1][pick], cfg.jitter, g)
+        weights = thin_part_weights(m, thin_px, cfg.thin_weight) if cfg.thin_weight else None
         with forward_precision(cfg.precision, x.device):
-            losses = step_losses(model, x, m)
+            losses = step_losses(model, x, m, weights)
         loss = losses.mean()  # photos of a batch have one size: the cross-entropy is the mean over all its pixels
         last_loss[pick] = losses.detach().float()
         opt.zero_grad(set_to_none=True)
