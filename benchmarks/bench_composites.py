@@ -131,3 +131,16 @@ def replay_args(doc: str) -> argparse.Namespace:
     parser.add_argument("--composites", type=int, default=24)
     parser.add_argument("--out", type=Path, required=True)
     return parser.parse_args()
+
+
+def seed_sweep_parser(doc: str) -> argparse.ArgumentParser:
+    """A parser with ``--data``, ``--seeds`` (1), ``--composites`` (48), ``--threads`` (1) and ``--out`` for a script
+    that scores segmenter choices over the first composites of several seeds (``segmenter_thin.py``,
+    ``segment_thin_fragments.py``); the script adds its own options."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--data", type=Path, required=True)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[1])
+    parser.add_argument("--composites", type=int, default=48)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--out", type=Path, required=True)
+    return parser

@@ -16,7 +16,6 @@ Run (2026-12-05, a network trained with thin parts weighted beside the shipped p
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -30,7 +29,7 @@ from affnerf.predict import grabcut
 from affnerf.predict.segment import mask_iou
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_composites import bench_composites  # noqa: E402
+from bench_composites import bench_composites, seed_sweep_parser  # noqa: E402
 from bench_segment import thin_recall  # noqa: E402
 from segmenter_ensemble import parse_vote, read_members, vote_name  # noqa: E402
 
@@ -82,14 +81,9 @@ def summary(rows: list[dict], votes: list[list[int]]) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--data", type=Path, required=True)
+    ap = seed_sweep_parser(__doc__)
     ap.add_argument("--members", type=Path, nargs="+", required=True, help="segmenter files (ensembles split)")
     ap.add_argument("--vote", type=parse_vote, action="append", required=True, help="member indices, e.g. 0,1")
-    ap.add_argument("--seeds", type=int, nargs="+", default=[1])
-    ap.add_argument("--composites", type=int, default=48)
-    ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     members = read_members(args.members)

@@ -119,10 +119,13 @@ def test_a_hard_share_outside_zero_to_one_is_refused_before_anything_is_written(
     assert not cfg.out.exists()
 
 
-def test_a_run_with_a_hard_share_trains(train_dataset, trained_segmenter, tmp_path):
+@pytest.mark.parametrize("option", [{"hard_share": 0.5}, {"thin_weight": 4.0}])
+def test_a_further_stage_with_hard_photos_or_thin_parts_weighted_trains(
+    train_dataset, trained_segmenter, tmp_path, option
+):
     cfg = segmenter.SegmenterTrainConfig(
-        data=train_dataset, out=tmp_path / "hard.pt", steps=3, batch=4, pool=6, val_photos=2, hard_share=0.5,
-        init=trained_segmenter,
+        data=train_dataset, out=tmp_path / "more.pt", steps=3, batch=4, pool=6, val_photos=2, init=trained_segmenter,
+        **option,
     )  # fmt: skip
     assert segmenter.train_segmenter(cfg)["steps_done"] == 3 and cfg.out.exists()
 
@@ -150,11 +153,3 @@ def test_thin_parts_weigh_more_in_the_cross_entropy_and_the_bulk_does_not():
     plain, weighted = segmenter.pixel_bce(logits, masks), segmenter.pixel_bce(logits, masks, weights)
     bce = torch.nn.functional.binary_cross_entropy_with_logits(logits, masks, reduction="none")
     assert float(weighted - plain) == pytest.approx(4.0 * float(bce[..., 9:11, 16:23].sum()) / 24**2, rel=1e-5)
-
-
-def test_a_run_with_thin_parts_weighted_trains(train_dataset, trained_segmenter, tmp_path):
-    cfg = segmenter.SegmenterTrainConfig(
-        data=train_dataset, out=tmp_path / "thin.pt", steps=2, batch=2, pool=4, val_photos=2, thin_weight=4.0,
-        init=trained_segmenter,
-    )  # fmt: skip
-    assert segmenter.train_segmenter(cfg)["steps_done"] == 2 and cfg.out.exists()

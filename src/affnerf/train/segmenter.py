@@ -78,7 +78,9 @@ class SegmenterTrainConfig:
             square of side 2 × ``thin_radius`` × the photo's larger side does not fit in the mask) in every
             cross-entropy term: those pixels count ``1 + thin_weight`` times. They are a small share of the photo,
             so a network that drops them loses little loss and little IoU, but they carry the labels that tell a
-            screwdriver from a bucket (``benchmarks/results/segmenter_u2netp.md``, "Thin parts weighted"). 0 = none.
+            screwdriver from a bucket. 0 = none, as the shipped networks were trained: a stage at 4 found more of
+            the thin parts but lost whole objects the shipped pair finds, so it was not kept
+            (``benchmarks/results/segmenter_u2netp.md``, "Thin parts weighted").
         thin_radius: the half-side of that square, a share of the training photo's larger side.
         network: the network's shape.
     """
