@@ -27,11 +27,11 @@ from scipy import ndimage
 from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
 from affnerf.predict import grabcut
-from affnerf.predict.segment import mask_iou, resolve_segmenter
+from affnerf.predict.segment import resolve_segmenter
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites, seed_sweep_parser  # noqa: E402
-from bench_segment import thin_recall  # noqa: E402
+from segmenter_thin import score  # noqa: E402
 
 #: (radius, share thin, least mean probability, largest gap) of each rule; None = the mask as it ships.
 RULES = (
@@ -64,13 +64,10 @@ def thin_fragments(prob: np.ndarray, mask: np.ndarray, rule: tuple) -> np.ndarra
     return np.isin(labels, index[keep])
 
 
-def score(rgb: np.ndarray, truth: np.ndarray, prob: np.ndarray, rule: tuple | None) -> dict:
-    """IoU and thin recall of ``auto``'s redrawn mask with ``rule``'s thin fragments added."""
+def rule_score(rgb: np.ndarray, truth: np.ndarray, prob: np.ndarray, rule: tuple | None) -> dict:
+    """:func:`segmenter_thin.score` of the shipped mask with ``rule``'s thin fragments added."""
     mask = segnet.probability_mask(prob)
-    if rule is not None:
-        mask = mask | thin_fragments(prob, mask, rule)
-    redrawn = grabcut.refine_with_grabcut(rgb, mask, prob) if mask.any() else mask
-    return {"iou": round(mask_iou(redrawn, truth), 4), "thin": thin_recall(redrawn, truth)}
+    return score(rgb, truth, prob, mask if rule is None else mask | thin_fragments(prob, mask, rule))
 
 
 def seed_result(data: Path, seed: int, count: int, model) -> dict:
@@ -78,7 +75,7 @@ def seed_result(data: Path, seed: int, count: int, model) -> dict:
     for c in bench_composites(data, seed, count):
         prob = segnet.photo_probability(model, c.rgb)
         row = {"index": c.index, "object": c.obj.record.object_id, "background": c.background}
-        row.update({rule_name(r): score(c.rgb, c.truth, prob, r) for r in RULES})
+        row.update({rule_name(r): rule_score(c.rgb, c.truth, prob, r) for r in RULES})
         rows.append(row)
         print(json.dumps(row), flush=True)
     summary = {}

@@ -11,7 +11,7 @@ photo_probability` gives the ensemble (both are means, so they commute). The res
 Run (2026-12-05, a network trained with thin parts weighted beside the shipped pair)::
 
     .venv/bin/python benchmarks/segmenter_thin.py --data /tmp/seg/data --members SHIPPED.pt THIN.pt \
-        --vote 0,1 --vote 0,2 --vote 0,1,2 --seeds 1 --out OUT.json
+        --vote 0,1 --vote 0,2 --vote 0,1,2 --vote 2 --seeds 1 --out OUT.json
 """
 
 from __future__ import annotations
@@ -44,9 +44,10 @@ def vote_map(maps: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
     return np.maximum(segnet.vote([w for w, _ in maps]), segnet.vote([t for _, t in maps]))
 
 
-def score(rgb: np.ndarray, truth: np.ndarray, prob: np.ndarray) -> dict:
-    """Mask IoU, thin-part recall and confidence of ``auto``'s redrawn mask from the photo probability ``prob``."""
-    mask = segnet.probability_mask(prob)
+def score(rgb: np.ndarray, truth: np.ndarray, prob: np.ndarray, mask: np.ndarray | None = None) -> dict:
+    """Mask IoU, thin-part recall and confidence of ``auto``'s redrawn mask from the photo probability ``prob``
+    (the network's mask ``mask``, or :func:`~affnerf.model.segmenter.probability_mask`'s)."""
+    mask = segnet.probability_mask(prob) if mask is None else mask
     redrawn = grabcut.refine_with_grabcut(rgb, mask, prob) if mask.any() else mask
     return {"iou": round(mask_iou(redrawn, truth), 4), "thin": thin_recall(redrawn, truth),
             "confidence": round(segnet.mask_confidence(prob, mask), 4)}  # fmt: skip
