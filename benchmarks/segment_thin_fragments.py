@@ -47,11 +47,8 @@ def rule_name(rule: tuple | None) -> str:
 
 def thin_fragments(prob: np.ndarray, mask: np.ndarray, rule: tuple) -> np.ndarray:
     """(H, W) bool: the hysteresis regions of ``prob`` outside ``mask`` that ``rule`` keeps (see the module doc)."""
-    from skimage.filters import apply_hysteresis_threshold
-
     radius, share, least, gap = rule
-    found = apply_hysteresis_threshold(prob.astype(np.float32), segnet.SEGMENTER_LOW_THRESHOLD,
-                                       segnet.SEGMENTER_THRESHOLD) & ~mask  # fmt: skip
+    found = segnet.hysteresis_mask(prob) & ~mask
     labels, count = ndimage.label(found, structure=np.ones((3, 3)))
     if count == 0 or not mask.any():
         return np.zeros_like(mask)
@@ -59,8 +56,8 @@ def thin_fragments(prob: np.ndarray, mask: np.ndarray, rule: tuple) -> np.ndarra
     thin = grabcut.thin_parts(found, radius)
     thin_share = ndimage.sum(thin, labels, index) / ndimage.sum(found, labels, index)
     means = ndimage.mean(prob, labels, index)
-    gaps = ndimage.minimum(ndimage.distance_transform_edt(~mask), labels, index)
-    keep = (thin_share >= share) & (means >= least) & (np.asarray(gaps) <= gap * max(mask.shape))
+    gaps = np.asarray(ndimage.minimum(ndimage.distance_transform_edt(~mask), labels, index))
+    keep = (thin_share >= share) & (means >= least) & (gaps <= gap * max(mask.shape))
     return np.isin(labels, index[keep])
 
 

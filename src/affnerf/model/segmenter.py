@@ -274,6 +274,19 @@ def photo_probability(model: AnySegmenter, rgb: np.ndarray, share: float | None 
     return np.maximum(whole, tiled_probability(model, rgb, share))
 
 
+def hysteresis_mask(
+    prob: np.ndarray, thresholds: tuple[float, float] = (SEGMENTER_LOW_THRESHOLD, SEGMENTER_THRESHOLD)
+) -> np.ndarray:
+    """(H, W) bool: pixels of ``prob`` above the high threshold, joined by touching ones above the low (hysteresis).
+
+    >>> hysteresis_mask(np.array([[0.45, 0.6, 0.1, 0.45]])).astype(int).tolist()
+    [[1, 1, 0, 0]]
+    """
+    from skimage.filters import apply_hysteresis_threshold
+
+    return apply_hysteresis_threshold(np.asarray(prob, np.float32), *thresholds)
+
+
 def probability_mask(
     prob: np.ndarray,
     inside: np.ndarray | None = None,
@@ -281,16 +294,15 @@ def probability_mask(
     main_min_size: float = SEGMENTER_MAIN_MIN_SIZE,
     thresholds: tuple[float, float] = (SEGMENTER_LOW_THRESHOLD, SEGMENTER_THRESHOLD),
 ) -> np.ndarray:
-    """(H, W) bool object mask of the segmenter's (H, W) probability map: pixels above
-    :data:`SEGMENTER_THRESHOLD`, with those above :data:`SEGMENTER_LOW_THRESHOLD` joined to them (hysteresis);
+    """(H, W) bool object mask of the segmenter's (H, W) probability map: :func:`hysteresis_mask` at ``thresholds``;
     then, within ``inside`` ((H, W) bool, or everywhere), the main 8-connected region (the largest size × mean
     probability ** :data:`SEGMENTER_REGION_SURENESS_POWER` of those at least :data:`SEGMENTER_MAIN_MIN_SIZE` of the
-    largest's size) and any other that the segmenter is on average
-    :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at least :data:`SEGMENTER_EXTRA_SIZE` of the main one's size and
-    within :data:`SEGMENTER_EXTRA_DISTANCE` of the photo's larger side of it. Chosen on the composite benchmark's
-    seed-1 draws (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region");
-    ``power`` and ``main_min_size`` replace the main region's two constants (benchmarks/segment_region_rule.py),
-    ``thresholds`` the hysteresis's (low, high) pair (benchmarks/segment_thresholds.py).
+    largest's size) and any other that the segmenter is on average :data:`SEGMENTER_EXTRA_CONFIDENCE` sure of, of at
+    least :data:`SEGMENTER_EXTRA_SIZE` of the main one's size and within :data:`SEGMENTER_EXTRA_DISTANCE` of the
+    photo's larger side of it. Chosen on the composite benchmark's seed-1 draws
+    (benchmarks/results/segmenter_u2netp.md, "Hysteresis and fragments" and "Which region"); ``power`` and
+    ``main_min_size`` replace the main region's two constants (benchmarks/segment_region_rule.py), ``thresholds``
+    the hysteresis's (low, high) pair (benchmarks/segment_thresholds.py).
 
     Example:
         >>> p = np.zeros((3, 40)); p[1, :12] = 0.95; p[1, 12] = 0.45; p[1, 14] = 0.95; p[0, 0] = 0.45; p[1, 30] = 0.99
@@ -299,9 +311,8 @@ def probability_mask(
         ([1, 1, 1, 0, 1, 0], True, False)
     """
     from scipy import ndimage
-    from skimage.filters import apply_hysteresis_threshold
 
-    found = apply_hysteresis_threshold(np.asarray(prob, np.float32), *thresholds)
+    found = hysteresis_mask(prob, thresholds)
     if inside is not None:
         found &= inside
     labels, count = ndimage.label(found, structure=np.ones((3, 3)))
