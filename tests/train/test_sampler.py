@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from affnerf.data.dataset import Dataset
-from affnerf.train.cache import ObjectFrames, cached_frames
+from affnerf.train.cache import ObjectFrames, cached_frames, part_edge_index
 from affnerf.train.config import PAPER, SMALL
-from affnerf.train.sampler import RaySampler, draw_pixels
+from affnerf.train.sampler import RaySampler, draw_edge_pixels, draw_pixels
 
 
 def _frames(train_dataset, tmp_path):
@@ -95,6 +95,44 @@ def test_outline_rays_take_the_uniform_share_and_zero_keeps_the_paper_draws(trai
         RaySampler(frames, 2, 8, 0.7, seed=0, outline_fraction=0.4)
 
 
+def test_edge_rays_land_on_the_band_between_parts_and_frames_without_edges_keep_their_pixels():
+    labels = np.zeros((2, 20, 30), np.uint8)
+    labels[:, 5:15, 5:12] = 1  # a handle ...
+    labels[0, 5:15, 12:25] = 2  # ... and a blade beside it in frame 0; frame 1 shows the handle alone
+    edges = part_edge_index(labels)
+    assert edges[0].tolist() == [0, 20, 20]  # columns 11 and 12, rows 5-14; none in frame 1
+    n = 3000
+    views = np.repeat([0, 1], n // 2)
+    u0, v0 = np.full(n, 7), np.full(n, 9)
+    u, v = draw_edge_pixels(np.random.default_rng(0), edges, (20, 30), views, np.ones(n, bool), u0, v0, 1)
+    first = views == 0
+    assert u[first].min() == 10 and u[first].max() == 13 and v[first].min() == 4 and v[first].max() == 15
+    assert set(np.unique(u[first]).tolist()) == {10, 11, 12, 13}  # both sides of the edge
+    assert (u[~first] == 7).all() and (v[~first] == 9).all()  # no edge in frame 1: the pixel stays
+    assert (u0 == 7).all()  # the inputs are not changed
+
+
+def _second_class_share(batch) -> float:
+    """Share of a batch's object rays whose label is not their object's most frequent one among them."""
+    shares = []
+    for b in range(len(batch.object_ids)):
+        labels = batch.labels[(batch.ray_object == b) & (batch.labels > 0)].numpy()
+        shares.append(1.0 - np.bincount(labels).max() / len(labels))
+    return float(np.mean(shares))
+
+
+def test_edge_rays_take_the_foreground_share_and_zero_keeps_the_draws(train_dataset, tmp_path):
+    frames = _frames(train_dataset, tmp_path)
+    plain = RaySampler(frames, 2, 2000, 0.5, seed=4, outline_fraction=0.4).next_batch()
+    zero = RaySampler(frames, 2, 2000, 0.5, seed=4, outline_fraction=0.4, edge_fraction=0.0).next_batch()
+    np.testing.assert_array_equal(plain.origins.numpy(), zero.origins.numpy())
+    edged = RaySampler(frames, 2, 2000, 0.5, seed=4, outline_fraction=0.4, edge_fraction=0.5).next_batch()
+    assert edged.object_ids == plain.object_ids
+    assert _second_class_share(edged) > _second_class_share(plain) + 0.05  # both sides of the parts' edges
+    with pytest.raises(ValueError, match="part edges' share"):
+        RaySampler(frames, 2, 8, 0.3, seed=0, edge_fraction=0.4)
+
+
 def test_each_epoch_visits_every_object_and_ranks_split_them(train_dataset, tmp_path):
     frames = _frames(train_dataset, tmp_path)
     n = len(frames)
@@ -145,16 +183,23 @@ def test_a_sampler_without_input_views_gives_empty_inputs_and_full_ray_batches(t
     assert batch.origins.shape == (64, 3) and batch.encoder_view.shape == (1, 0)
 
 
-def test_ray_shares_over_one_are_refused_with_one_line(tmp_path, capsys):
+@pytest.mark.parametrize(
+    ("shares", "message"),
+    [
+        (["--foreground-fraction", "0.7", "--outline-fraction", "0.4"], "--outline-fraction are shares >= 0 summing"),
+        (["--foreground-fraction", "0.3", "--edge-fraction", "0.4"], "--edge-fraction is a share of the"),
+    ],
+)
+def test_ray_shares_out_of_range_are_refused_with_one_line(tmp_path, capsys, shares, message):
     from affnerf.cli.main import main
 
     argv = ["train", "--data", str(tmp_path), "--out", str(tmp_path / "run"), "--steps", "10"]
-    assert main([*argv, "--foreground-fraction", "0.7", "--outline-fraction", "0.4"]) == 2
-    assert "--outline-fraction are shares >= 0 summing to at most 1" in capsys.readouterr().err
+    assert main([*argv, *shares]) == 2
+    assert message in capsys.readouterr().err
     assert not (tmp_path / "run").exists()
 
 
-def test_the_trainer_draws_the_configs_outline_rays(tiny_train_config):
+def test_the_trainer_draws_the_configs_outline_and_edge_rays(tiny_train_config):
     import torch
 
     from affnerf.train import distributed
@@ -165,4 +210,7 @@ def test_the_trainer_draws_the_configs_outline_rays(tiny_train_config):
     trainer.setup()
     sampler = trainer.state.sampler
     assert (sampler.foreground_fraction, sampler.outline_fraction, sampler.outline_radius) == (0.5, 0.4, 2)
+    edged = Trainer(tiny_train_config(steps=1, edge_fraction=0.2, edge_radius=2), cpu)
+    edged.setup()
+    assert (edged.state.sampler.edge_fraction, edged.state.sampler.edge_radius) == (0.2, 2)
     assert SMALL.outline_fraction == 0.4 and PAPER.outline_fraction == 0.0

@@ -83,6 +83,29 @@ def foreground_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return offsets, (np.concatenate(fg) if fg else np.zeros(0, np.int32))
 
 
+def part_edge_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (N + 1,) and flat pixel indices (M,) of the part edges of (N, H, W) label maps: the object pixels
+    with an object pixel of another class among their eight neighbours (edges with the background not counted).
+
+    Example:
+        >>> labels = np.zeros((1, 3, 4), np.uint8); labels[0, :, 1] = 1; labels[0, :, 2] = 2
+        >>> offsets, pixels = part_edge_index(labels)
+        >>> offsets.tolist(), pixels.tolist()
+        ([0, 6], [1, 2, 5, 6, 9, 10])
+    """
+    n, h, w = labels.shape
+    padded = np.pad(labels, ((0, 0), (1, 1), (1, 1)))
+    edge = np.zeros(labels.shape, bool)
+    for dv in (-1, 0, 1):
+        for du in (-1, 0, 1):
+            other = padded[:, 1 + dv : 1 + dv + h, 1 + du : 1 + du + w]
+            edge |= (other > 0) & (other != labels)
+    edge &= labels > 0
+    per_frame = [np.flatnonzero(edge[i].reshape(-1)).astype(np.int32) for i in range(n)]
+    offsets = np.concatenate([[0], np.cumsum([len(f) for f in per_frame])]).astype(np.int64)
+    return offsets, (np.concatenate(per_frame) if per_frame else np.zeros(0, np.int32))
+
+
 def frames_from_arrays(
     object_id: str,
     rgb: np.ndarray,

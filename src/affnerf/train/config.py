@@ -73,6 +73,11 @@ class TrainConfig:
         outline_radius: half-width in pixels of the training images (after ``image_scale``) of that band. The
             preset's 3; 6 raised 2D mIoU, PSNR and F@1cm a little and cost 0.035-0.057 3D affordance mIoU
             (benchmarks/results/outline_share.md, one seed).
+        edge_fraction: share of rays drawn near the edges between parts inside the object (an object pixel with
+            an object pixel of another class among its neighbours, moved by up to ``edge_radius`` pixels along
+            each image axis), taken from the ``foreground_fraction`` ones, so the labels are taught where they
+            change and on thin parts (0 = none, the draws as before; benchmarks/results/part_edges.md).
+        edge_radius: half-width in pixels of the training images of that band.
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
@@ -152,6 +157,8 @@ class TrainConfig:
     foreground_fraction: float = 0.5
     outline_fraction: float = 0.0
     outline_radius: int = 3
+    edge_fraction: float = 0.0
+    edge_radius: int = 1
     affordance_weight: float = 4e-4
     affordance_balance: float = 0.0
     mask_weight: float = 0.0
@@ -282,6 +289,11 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError(
             "--foreground-fraction and --outline-fraction are shares >= 0 summing to at most 1 and "
             f"--outline-radius is >= 0, not {shares[0]}, {shares[1]} and {config.outline_radius}"
+        )
+    if not 0 <= config.edge_fraction <= config.foreground_fraction or config.edge_radius < 0:
+        raise AffnerfError(
+            f"--edge-fraction is a share of the --foreground-fraction rays (0 to {config.foreground_fraction}) and "
+            f"--edge-radius >= 0, not {config.edge_fraction} and {config.edge_radius}"
         )
     if config.optim.warmup_steps < 0:
         raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")

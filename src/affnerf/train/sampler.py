@@ -18,7 +18,7 @@ import torch
 
 from affnerf.data.crop import resample_to_crop
 from affnerf.rendering.rays import pixel_rays
-from affnerf.train.cache import ObjectFrames
+from affnerf.train.cache import ObjectFrames, part_edge_index
 from affnerf.train.points import PointSet
 
 if TYPE_CHECKING:
@@ -124,6 +124,46 @@ def draw_pixels(
     return u, v
 
 
+def draw_edge_pixels(
+    rng: np.random.Generator,
+    edges: tuple[np.ndarray, np.ndarray],
+    shape: tuple[int, int],
+    views: np.ndarray,
+    chosen: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    radius: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels of the ``chosen`` rays moved near a part edge: a uniform edge pixel of the ray's frame shifted by a
+    uniform integer offset in [-radius, radius] along u and along v (clipped to the image). A ray whose frame has no
+    part edge keeps its pixel.
+
+    Args:
+        rng: random source.
+        edges: (N + 1,) offsets and (M,) flat pixel indices of each frame's part edges
+            (:func:`affnerf.train.cache.part_edge_index`).
+        shape: (H, W) of the frames.
+        views: (R,) frame of each ray; chosen: (R,) bool, the rays to move; u, v: (R,) their pixels so far.
+        radius: the band's half-width in pixels.
+
+    Returns:
+        u (R,), v (R,) integer pixel indices (new arrays).
+    """
+    offsets, pixels = edges
+    start, stop = offsets[views], offsets[views + 1]
+    pick = chosen & (stop > start)
+    u, v = u.copy(), v.copy()
+    if not pick.any():
+        return u, v
+    k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
+    flat = pixels[k]
+    shift = rng.integers(-radius, radius + 1, (2, len(flat)))
+    h, w = shape
+    u[pick] = np.clip(flat % w + shift[0], 0, w - 1)
+    v[pick] = np.clip(flat // w + shift[1], 0, h - 1)
+    return u, v
+
+
 class RaySampler:
     """Draws :class:`RayBatch` es following the paper's rule.
 
@@ -139,6 +179,9 @@ class RaySampler:
         outline_fraction: share of rays drawn near the object (:func:`draw_pixels`' ``near``), taken from the
             uniform ones; 0 keeps the paper's rule and its exact sequence of draws.
         outline_radius: their band's half-width in pixels of the frames.
+        edge_fraction: share of rays drawn near a part edge inside the object (:func:`draw_edge_pixels`), taken from
+            the foreground ones; 0 keeps the draws as they were.
+        edge_radius: their band's half-width in pixels of the frames.
     """
 
     def __init__(
@@ -153,6 +196,8 @@ class RaySampler:
         input_views: int = 1,
         outline_fraction: float = 0.0,
         outline_radius: int = 0,
+        edge_fraction: float = 0.0,
+        edge_radius: int = 0,
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
@@ -160,6 +205,8 @@ class RaySampler:
             raise ValueError(
                 f"ray shares must be >= 0 and sum to at most 1, not {foreground_fraction} + {outline_fraction}"
             )
+        if not 0 <= edge_fraction <= foreground_fraction:
+            raise ValueError(f"the part edges' share is in [0, {foreground_fraction}], not {edge_fraction}")
         for o in objects:
             if len(o) < input_views + 1:
                 raise ValueError(
@@ -172,6 +219,8 @@ class RaySampler:
         self.rays_per_step = rays_per_step
         self.foreground_fraction = foreground_fraction
         self.outline_fraction, self.outline_radius = outline_fraction, outline_radius
+        self.edge_fraction, self.edge_radius = edge_fraction, edge_radius
+        self._edges = [part_edge_index(np.asarray(o.labels)) for o in objects] if edge_fraction else []
         self.seed, self.rank, self.world = seed, rank, world
         self.epoch, self.position = 0, 0
         self.rng = np.random.default_rng([seed, rank, 17])
@@ -193,6 +242,8 @@ class RaySampler:
             views,
             config.outline_fraction,
             config.outline_radius,
+            config.edge_fraction,
+            config.edge_radius,
         )
 
     def _epoch_order(self, epoch: int) -> np.ndarray:
@@ -228,6 +279,10 @@ class RaySampler:
             if self.outline_fraction:
                 near = ~fg & (share < self.foreground_fraction + self.outline_fraction)
             u, v = draw_pixels(self.rng, obj, views, fg, near, self.outline_radius)
+            if self.edge_fraction:
+                on_edge = share < self.edge_fraction
+                edges, shape = self._edges[oi], obj.labels.shape[1:]
+                u, v = draw_edge_pixels(self.rng, edges, shape, views, on_edge, u, v, self.edge_radius)
             crop_depth, crop_labels = crop_maps(obj, enc)
             images.append(
                 (np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)
