@@ -113,15 +113,31 @@ def draw_pixels(
     on_object = foreground if near is None else foreground | near
     pick = on_object & (stop > start)
     if pick.any():
-        k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
-        flat[pick] = frames.fg_pixels[k]
+        flat[pick] = indexed_pixels(rng, frames.fg_offsets, frames.fg_pixels, views, pick)
     u, v = flat % w, flat // w
-    shift = pick & near if near is not None else np.zeros_like(pick)
-    if shift.any():
-        offsets = rng.integers(-radius, radius + 1, (2, int(shift.sum())))
-        u[shift] = np.clip(u[shift] + offsets[0], 0, w - 1)
-        v[shift] = np.clip(v[shift] + offsets[1], 0, h - 1)
+    if near is not None:
+        jitter_pixels(rng, u, v, pick & near, radius, (h, w))
     return u, v
+
+
+def indexed_pixels(
+    rng: np.random.Generator, offsets: np.ndarray, pixels: np.ndarray, views: np.ndarray, pick: np.ndarray
+) -> np.ndarray:
+    """(P,) flat pixel indices, one drawn uniformly for each of the P ``pick`` ed rays among its frame's entries of
+    a per-frame index ((N + 1,) ``offsets`` into (M,) ``pixels``; every picked ray's frame must have one)."""
+    start, stop = offsets[views], offsets[views + 1]
+    return pixels[start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)]
+
+
+def jitter_pixels(
+    rng: np.random.Generator, u: np.ndarray, v: np.ndarray, chosen: np.ndarray, radius: int, shape: tuple[int, int]
+) -> None:
+    """Move the ``chosen`` rays' (R,) pixels u, v in place by a uniform integer offset in [-radius, radius] along
+    each axis, clipped to the (H, W) image."""
+    if chosen.any():
+        offsets = rng.integers(-radius, radius + 1, (2, int(chosen.sum())))
+        u[chosen] = np.clip(u[chosen] + offsets[0], 0, shape[1] - 1)
+        v[chosen] = np.clip(v[chosen] + offsets[1], 0, shape[0] - 1)
 
 
 def draw_edge_pixels(
@@ -150,17 +166,12 @@ def draw_edge_pixels(
         u (R,), v (R,) integer pixel indices (new arrays).
     """
     offsets, pixels = edges
-    start, stop = offsets[views], offsets[views + 1]
-    pick = chosen & (stop > start)
+    pick = chosen & (offsets[views + 1] > offsets[views])
     u, v = u.copy(), v.copy()
-    if not pick.any():
-        return u, v
-    k = start[pick] + np.floor(rng.random(int(pick.sum())) * (stop - start)[pick]).astype(np.int64)
-    flat = pixels[k]
-    shift = rng.integers(-radius, radius + 1, (2, len(flat)))
-    h, w = shape
-    u[pick] = np.clip(flat % w + shift[0], 0, w - 1)
-    v[pick] = np.clip(flat // w + shift[1], 0, h - 1)
+    if pick.any():
+        flat = indexed_pixels(rng, offsets, pixels, views, pick)
+        u[pick], v[pick] = flat % shape[1], flat // shape[1]
+        jitter_pixels(rng, u, v, pick, radius, shape)
     return u, v
 
 
