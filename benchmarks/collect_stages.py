@@ -152,8 +152,8 @@ def main() -> None:
         file, run, name = ref.rsplit(":", 2)
         runs[name] = json.loads(Path(file).read_text())["runs"][run]
     runs.update({name: stage_scores(args.work, name) for name in args.names})
-    for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (any stage)
-        run["test64"] = _eval_means(args.work / f"test64_{name}")
+    for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (a reference's own)
+        run["test64"] = _eval_means(args.work / f"test64_{name}") or run.get("test64")
     args.out.write_text(json.dumps({"runs": compact(runs) if args.compact else runs}, indent=1) + "\n")
     if args.markdown:
         shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
