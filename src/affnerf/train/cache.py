@@ -76,11 +76,17 @@ def _signature(obj: ObjectData, scale: float, crop: int) -> str:
     return f"v{CACHE_VERSION}-{digest}-{scale:g}-{crop}"
 
 
+def pixel_index(masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (N + 1,) and flat pixel indices (M,) of the True pixels of (N, H, W) masks, frame after frame (frame
+    i's between ``offsets[i]`` and ``offsets[i + 1]``)."""
+    per_frame = [np.flatnonzero(masks[i].reshape(-1)).astype(np.int32) for i in range(len(masks))]
+    offsets = np.concatenate([[0], np.cumsum([len(f) for f in per_frame])]).astype(np.int64)
+    return offsets, (np.concatenate(per_frame) if per_frame else np.zeros(0, np.int32))
+
+
 def foreground_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Offsets (N + 1,) and flat pixel indices (M,) of the object pixels of (N, H, W) label maps."""
-    fg = [np.flatnonzero(labels[i].reshape(-1) > 0).astype(np.int32) for i in range(len(labels))]
-    offsets = np.concatenate([[0], np.cumsum([len(f) for f in fg])]).astype(np.int64)
-    return offsets, (np.concatenate(fg) if fg else np.zeros(0, np.int32))
+    return pixel_index(labels > 0)
 
 
 def part_edge_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -93,17 +99,14 @@ def part_edge_index(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         >>> offsets.tolist(), pixels.tolist()
         ([0, 6], [1, 2, 5, 6, 9, 10])
     """
-    n, h, w = labels.shape
+    _, h, w = labels.shape
     padded = np.pad(labels, ((0, 0), (1, 1), (1, 1)))
     edge = np.zeros(labels.shape, bool)
     for dv in (-1, 0, 1):
         for du in (-1, 0, 1):
             other = padded[:, 1 + dv : 1 + dv + h, 1 + du : 1 + du + w]
             edge |= (other > 0) & (other != labels)
-    edge &= labels > 0
-    per_frame = [np.flatnonzero(edge[i].reshape(-1)).astype(np.int32) for i in range(n)]
-    offsets = np.concatenate([[0], np.cumsum([len(f) for f in per_frame])]).astype(np.int64)
-    return offsets, (np.concatenate(per_frame) if per_frame else np.zeros(0, np.int32))
+    return pixel_index(edge & (labels > 0))
 
 
 def frames_from_arrays(
