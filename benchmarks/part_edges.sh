@@ -4,8 +4,10 @@
 # now, and are reproduced exactly here), each with a share of its object rays drawn near the edges between parts
 # inside the object (`--edge-fraction`, 0 = the preset) in a band of `--edge-radius` pixels; then both calibrated
 # and scored on val40 and on the 64 test objects (test64), side by side.
-#   DATA=... [WORK=...] [CACHE=...] [RUNS="0:1:0 0.2:1:0"] benchmarks/part_edges.sh
-# RUNS: two runs, each FRACTION:RADIUS:SEED (the results' runs: "0:1:0 0.2:1:0", then "0.1:1:0 0.2:1:1").
+#   DATA=... [WORK=...] [CACHE=...] [RUNS="0:1:0 0.2:1:0"] [TEST64=1] benchmarks/part_edges.sh
+# RUNS: two runs, each FRACTION:RADIUS:SEED[:FOREGROUND] (the results' runs: "0:1:0 0.2:1:0", then "0.1:1:0
+# 0.2:1:1", then "0.1:1:0:0.6 0.1:1:1:0.6" with TEST64=0: a foreground share of 0.6 of which 0.1 near the edges
+# leaves the object's uniform share at the preset's 0.5 and takes the edges' rays from the uniform ones instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
@@ -20,13 +22,18 @@ source benchmarks/side_by_side.sh
 names=()
 args=()
 for spec in "${runs[@]}"; do
-    IFS=: read -r fraction radius seed <<< "$spec"
+    IFS=: read -r fraction radius seed foreground <<< "$spec"
+    foreground="${foreground:-0.5}"
     name="edges${fraction}r${radius}_s$seed"
     [ "$fraction" = 0 ] && name="preset_s$seed"
+    [ "$foreground" = 0.5 ] || name="${name}_fg$foreground"
     names+=("$name")
-    args+=("$name" "$STEPS" --seed "$seed" --edge-fraction "$fraction" --edge-radius "$radius")
+    args+=("$name" "$STEPS" --seed "$seed" --edge-fraction "$fraction" --edge-radius "$radius"
+        --foreground-fraction "$foreground")
 done
-scored_pair "${args[@]:0:8}" -- "${args[@]:8:8}"
-test64 "${names[0]}" "$W/${names[0]}" &
-test64 "${names[1]}" "$W/${names[1]}" &
-wait
+scored_pair "${args[@]:0:10}" -- "${args[@]:10:10}"
+if [ "${TEST64:-1}" = 1 ]; then
+    test64 "${names[0]}" "$W/${names[0]}" &
+    test64 "${names[1]}" "$W/${names[1]}" &
+    wait
+fi
