@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from affnerf.data.crop import crop_intrinsics, resample_to_crop
+from affnerf.data.crop import crop_intrinsics, resample_to_crop, touches_border
 
 
 def test_a_crop_at_the_windows_own_resolution_reads_the_window_pixel_for_pixel():
@@ -32,3 +32,11 @@ def test_crop_pixels_outside_the_image_are_zero():
     assert out.dtype == np.float16
     np.testing.assert_array_equal(out[:, :2], 0)
     np.testing.assert_array_equal(out[:, 2:], 1)
+
+
+def test_an_object_touching_any_side_of_the_frame_is_cut():
+    masks = np.zeros((6, 5, 7), bool)
+    masks[0, 2, 3] = True  # inside
+    masks[1, 0, 3] = masks[2, 4, 3] = masks[3, 2, 0] = masks[4, 2, 6] = True  # top, bottom, left, right
+    assert touches_border(masks).tolist() == [False, True, True, True, True, False]
+    assert touches_border(masks[1]) and not touches_border(masks[0])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from affnerf.train.cache import ObjectFrames, part_edge_index
-from affnerf.train.pixels import draw_edge_pixels, draw_pixels
+from affnerf.train.pixels import draw_edge_pixels, draw_pixels, input_view_chances
 
 
 def test_foreground_draws_fall_back_to_uniform_where_no_object_is_seen():
@@ -61,3 +61,17 @@ def test_edge_rays_land_on_the_band_between_parts_and_frames_without_edges_keep_
     assert set(np.unique(u[first]).tolist()) == {10, 11, 12, 13}  # both sides of the edge
     assert (u[~first] == 7).all() and (v[~first] == 9).all()  # no edge in frame 1: the pixel stays
     assert (u0 == 7).all()  # the inputs are not changed
+
+
+def test_input_view_chances_leave_out_cut_frames_and_keep_the_uniform_choice_where_they_cannot():
+    labels = np.zeros((4, 6, 8), np.uint8)
+    labels[0, 2:4, 2:5] = 1  # whole
+    labels[1, 0:3, 2:5] = 1  # touches the top row
+    labels[2, 2:4, 5:8] = 3  # touches the right column
+    labels[3, 1:5, 1:7] = 2  # whole
+    np.testing.assert_allclose(input_view_chances(labels, 0.0), [0.5, 0.0, 0.0, 0.5])
+    np.testing.assert_allclose(input_view_chances(labels, 0.5), [1 / 3, 1 / 6, 1 / 6, 1 / 3])
+    assert input_view_chances(labels, 1.0) is None
+    assert input_view_chances(labels, 0.0, views=3) is None  # two whole frames cannot give three views
+    assert input_view_chances(labels[[1, 2]], 0.0) is None  # every frame cut: nothing to prefer
+    assert input_view_chances(labels[[0, 3]], 0.0) is None  # none cut

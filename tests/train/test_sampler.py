@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -78,6 +80,23 @@ def test_edge_rays_take_the_foreground_share_and_zero_keeps_the_draws(train_data
         RaySampler(frames, 2, 8, 0.3, seed=0, edge_fraction=0.4)
 
 
+def test_cut_input_weight_zero_encodes_only_whole_views_and_one_keeps_the_draws(train_dataset, tmp_path):
+    frames = []
+    for f in _frames(train_dataset, tmp_path):  # the object runs off the left edge in every even frame
+        labels = np.array(f.labels)
+        labels[::2, :, 0] = 1
+        frames.append(dataclasses.replace(f, labels=labels))
+    plain = RaySampler(frames, 2, 64, 0.5, seed=3)
+    ones = RaySampler(frames, 2, 64, 0.5, seed=3, cut_input_weight=1.0)
+    whole = RaySampler(frames, 2, 64, 0.5, seed=3, cut_input_weight=0.0)
+    for _ in range(20):
+        a, b, c = plain.next_batch(), ones.next_batch(), whole.next_batch()
+        np.testing.assert_array_equal(a.origins.numpy(), b.origins.numpy())
+        assert (c.encoder_view.numpy() % 2 == 1).all()
+    with pytest.raises(ValueError, match="cut input views' weight"):
+        RaySampler(frames, 2, 8, 0.5, seed=0, cut_input_weight=1.5)
+
+
 def test_each_epoch_visits_every_object_and_ranks_split_them(train_dataset, tmp_path):
     frames = _frames(train_dataset, tmp_path)
     n = len(frames)
@@ -133,6 +152,7 @@ def test_a_sampler_without_input_views_gives_empty_inputs_and_full_ray_batches(t
     [
         (["--foreground-fraction", "0.7", "--outline-fraction", "0.4"], "--outline-fraction are shares >= 0 summing"),
         (["--foreground-fraction", "0.3", "--edge-fraction", "0.4"], "--edge-fraction is a share of the"),
+        (["--cut-input-weight", "-0.1"], "--cut-input-weight is in [0, 1]"),
     ],
 )
 def test_ray_shares_out_of_range_are_refused_with_one_line(tmp_path, capsys, shares, message):
@@ -158,4 +178,7 @@ def test_the_trainer_draws_the_configs_outline_and_edge_rays(tiny_train_config):
     edged = Trainer(tiny_train_config(steps=1, edge_fraction=0.2, edge_radius=2), cpu)
     edged.setup()
     assert (edged.state.sampler.edge_fraction, edged.state.sampler.edge_radius) == (0.2, 2)
+    whole = Trainer(tiny_train_config(steps=1, cut_input_weight=0.0), cpu)
+    whole.setup()
+    assert whole.state.sampler.cut_input_weight == 0.0 and SMALL.cut_input_weight == 1.0
     assert SMALL.outline_fraction == 0.4 and PAPER.outline_fraction == 0.0

@@ -28,6 +28,24 @@ def object_bbox(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 
+def touches_border(mask: np.ndarray) -> np.ndarray:
+    """Whether the object reaches the image's border, so the frame may cut part of it off.
+
+    Args:
+        mask: (..., H, W) bool, True on the object.
+
+    Returns:
+        (...) bool.
+
+    Example:
+        >>> m = np.zeros((2, 3, 4), bool); m[0, 1, 1] = True; m[1, 1, 3] = True
+        >>> touches_border(m).tolist()
+        [False, True]
+    """
+    rows = mask[..., 0, :].any(-1) | mask[..., -1, :].any(-1)
+    return rows | mask[..., :, 0].any(-1) | mask[..., :, -1].any(-1)
+
+
 def square_box(bbox: tuple[int, int, int, int], margin: float = CROP_MARGIN) -> tuple[float, float, float]:
     """Centre (cx, cy) and side of the square around ``bbox`` grown by ``margin`` of its larger side each way."""
     x0, y0, x1, y1 = bbox

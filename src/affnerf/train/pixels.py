@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from affnerf.data.crop import touches_border
 from affnerf.train.cache import ObjectFrames
 
 
@@ -20,6 +21,32 @@ def other_views(rng: np.random.Generator, num_views: int, excluded: np.ndarray, 
     """
     allowed = np.setdiff1d(np.arange(num_views), excluded)
     return allowed[rng.integers(0, len(allowed), count)]
+
+
+def input_view_chances(labels: np.ndarray, cut_weight: float, views: int = 1) -> np.ndarray | None:
+    """Chance of each frame to be an encoder's input when a frame whose object touches the image border (and may
+    be cut off by it) counts ``cut_weight`` times a whole one.
+
+    Args:
+        labels: (N, H, W) affordance ids, 0 = background.
+        cut_weight: in [0, 1]; 1 keeps the uniform choice.
+        views: frames drawn together (without replacement) for one object.
+
+    Returns:
+        (N,) probabilities summing to 1, or None for the uniform choice (a weight of 1, an object none of whose
+        frames is cut, or one with fewer than ``views`` frames that a draw could take).
+
+    Example:
+        >>> labels = np.zeros((3, 4, 4), np.uint8); labels[0, 1, 1] = labels[1, 0, 2] = labels[2, 2, 2] = 1
+        >>> input_view_chances(labels, 0.0).tolist()
+        [0.5, 0.0, 0.5]
+    """
+    cut = touches_border(labels > 0)
+    whole = int((~cut).sum())
+    if cut_weight >= 1 or whole == len(cut) or whole < (views if cut_weight == 0 else 1):
+        return None
+    weights = np.where(cut, cut_weight, 1.0)
+    return weights / weights.sum()
 
 
 def draw_pixels(

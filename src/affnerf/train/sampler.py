@@ -19,7 +19,7 @@ import torch
 from affnerf.data.crop import resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames, part_edge_index
-from affnerf.train.pixels import draw_edge_pixels, draw_pixels, other_views
+from affnerf.train.pixels import draw_edge_pixels, draw_pixels, input_view_chances, other_views
 from affnerf.train.points import PointSet
 
 if TYPE_CHECKING:
@@ -90,6 +90,8 @@ class RaySampler:
         edge_fraction: share of rays drawn near a part edge inside the object (:func:`draw_edge_pixels`), taken from
             the foreground ones; 0 keeps the draws as they were.
         edge_radius: their band's half-width in pixels of the frames.
+        cut_input_weight: how much a frame whose object touches the image border counts, against a whole one, in
+            the choice of encoded views (:func:`input_view_chances`); 1 keeps the uniform choice and its draws.
     """
 
     def __init__(
@@ -106,6 +108,7 @@ class RaySampler:
         outline_radius: int = 0,
         edge_fraction: float = 0.0,
         edge_radius: int = 0,
+        cut_input_weight: float = 1.0,
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
@@ -113,6 +116,8 @@ class RaySampler:
             raise ValueError(
                 f"ray shares must be >= 0 and sum to at most 1, not {foreground_fraction} + {outline_fraction}"
             )
+        if not 0 <= cut_input_weight <= 1:
+            raise ValueError(f"the cut input views' weight is in [0, 1], not {cut_input_weight}")
         if not 0 <= edge_fraction <= foreground_fraction:
             raise ValueError(f"the part edges' share is in [0, {foreground_fraction}], not {edge_fraction}")
         for o in objects:
@@ -129,6 +134,12 @@ class RaySampler:
         self.outline_fraction, self.outline_radius = outline_fraction, outline_radius
         self.edge_fraction, self.edge_radius = edge_fraction, edge_radius
         self._edges = [part_edge_index(np.asarray(o.labels)) for o in objects] if edge_fraction else []
+        self.cut_input_weight = cut_input_weight
+        self._input_chances = (
+            [input_view_chances(np.asarray(o.labels), cut_input_weight, input_views) for o in objects]
+            if cut_input_weight < 1
+            else [None] * len(objects)
+        )
         self.seed, self.rank, self.world = seed, rank, world
         self.epoch, self.position = 0, 0
         self.rng = np.random.default_rng([seed, rank, 17])
@@ -152,6 +163,7 @@ class RaySampler:
             config.outline_radius,
             config.edge_fraction,
             config.edge_radius,
+            config.cut_input_weight,
         )
 
     def _epoch_order(self, epoch: int) -> np.ndarray:
@@ -179,7 +191,11 @@ class RaySampler:
         images, enc_views, parts = [], [], []
         for slot, (oi, count) in enumerate(zip(chosen, counts, strict=True)):
             obj = self.objects[oi]
-            enc = self.rng.choice(len(obj), self.input_views, replace=False)
+            chances = self._input_chances[oi]
+            if chances is None:
+                enc = self.rng.choice(len(obj), self.input_views, replace=False)
+            else:
+                enc = self.rng.choice(len(obj), self.input_views, replace=False, p=chances)
             views = other_views(self.rng, len(obj), enc, int(count))
             share = self.rng.random(int(count))
             fg = share < self.foreground_fraction
