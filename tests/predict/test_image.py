@@ -111,7 +111,9 @@ def test_a_clean_photo_is_confident_and_a_mask_is_never_doubted(tmp_path, caplog
     assert clean.confident and clean.background_uniformity == 1.0 and clean.border_contact == 0.0
     assert clean.object_fraction == pytest.approx(30 * 30 / (120 * 90))
     assert masked.confident and masked.background_uniformity is None and masked.object_fraction > 0.8
-    assert not caplog.records
+    assert not clean.cut_off and masked.cut_off  # not doubted, but the mask runs off the photo: said once
+    [record] = caplog.records
+    assert "n.png: the object reaches the edge of the photo" in record.getMessage()
 
 
 def test_a_blank_frame_is_an_error_saying_what_to_give(tmp_path):
@@ -169,3 +171,18 @@ def test_a_box_confines_the_separation_and_is_recorded(tmp_path):
     assert prepare_image(path, 64, segment="uniform").separation.to_json()["box"] is None
     with pytest.raises(AffnerfError, match="two.png: --box 200 0 300 50 holds no pixel"):
         prepare_image(path, 64, box=(200, 0, 300, 50))
+
+
+def test_an_object_running_off_the_photo_is_recorded_and_warned_about_once(tmp_path, caplog):
+    whole = _photo()
+    cut = whole.copy()
+    cut[30:60, 100:120] = (200, 30, 30)  # the box now runs off the right edge
+    with caplog.at_level(logging.WARNING, logger="affnerf.predict.image"):
+        inside = prepare_image(_save(tmp_path, "whole.png", Image.fromarray(whole)), 32)
+        assert not caplog.records
+        prepared = prepare_image(_save(tmp_path, "cut.png", Image.fromarray(cut)), 32)
+    assert not inside.separation.cut_off and inside.separation.to_json()["cut_off"] is False
+    assert prepared.separation.cut_off and prepared.separation.to_json()["cut_off"] is True
+    assert prepared.separation.confident  # the mask itself is fine: only the view is wanting
+    [record] = caplog.records
+    assert record.getMessage().startswith(f"{tmp_path / 'cut.png'}: the object reaches the edge of the photo")

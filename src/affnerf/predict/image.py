@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.data.crop import crop_object, object_bbox
+from affnerf.data.crop import crop_object, object_bbox, touches_border
 from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
 from affnerf.predict.segment import (
@@ -71,6 +71,8 @@ class Separation:
         note: why ``auto`` fell back from the salient model (``None`` otherwise).
         confidence: the object segmenter's mean probability over its mask (``None`` for other methods).
         box: the rectangle (x0, y0, x1, y1) the separation was confined to (``None``: the whole image).
+        cut_off: the object reaches the image's edge, so the photo may not show all of it (never for ``whole
+            image``, which is the image by definition).
     """
 
     source: str
@@ -83,6 +85,7 @@ class Separation:
     note: str | None = None
     confidence: float | None = None
     box: Box | None = None
+    cut_off: bool = False
 
     @property
     def confident(self) -> bool:
@@ -103,6 +106,7 @@ class Separation:
             "box": None if self.box is None else list(self.box),
             "note": self.note,
             "problems": list(self.problems),
+            "cut_off": self.cut_off,
         }
 
     def warning(self, image: Path) -> str | None:
@@ -113,6 +117,16 @@ class Separation:
             f"{image}: the object could not be separated with confidence ({'; '.join(self.problems)}), so the "
             f"prediction may be a blob; give the object's mask with --mask FILE (white = object; the mask used is "
             f"written as mask.png to fix), or a photo of it on a plain background"
+        )
+
+    def cut_off_warning(self, image: Path) -> str | None:
+        """The one-line warning of an object the photo may not show whole (``None`` when it does)."""
+        if not self.cut_off:
+            return None
+        return (
+            f"{image}: the object reaches the edge of the photo, so part of it may be cut off and the model will "
+            f"guess the rest (from such views of test objects it predicts 0.035 mIoU worse than from whole views "
+            f"of the same objects); a photo that shows the whole object with a margin around it is better"
         )
 
 
@@ -188,7 +202,8 @@ def measure_separation(rgb: np.ndarray, mask: np.ndarray, source: str, seg: Segm
     problems = (
         () if source in TRUSTED_SOURCES else separation_problems(fraction, contact, uniformity, agreement, confidence)
     )
-    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note, confidence, box)
+    cut = source != "whole image" and bool(touches_border(mask))
+    return Separation(source, fraction, contact, uniformity, problems, agreement, compared, note, confidence, box, cut)
 
 
 def _mask_from_file(path: Path, size: tuple[int, int]) -> np.ndarray:
@@ -247,8 +262,9 @@ def prepare_image(
         segmenter: an object segmenter file (``affnerf train-segmenter``) for ``segmenter``, and for ``auto``
             before the salient model; ``None`` for the shipped one, ``segment.NO_SEGMENTER`` for none.
 
-    Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), and when
-    ``auto`` falls back because the optional salient model is not installed.
+    Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), else when
+    the object reaches the image's edge (``Separation.cut_off``), and when ``auto`` falls back because the optional
+    salient model is not installed.
 
     Raises:
         AffnerfError: naming the file, for a missing or unreadable image or mask, or an image with no object
@@ -268,8 +284,9 @@ def prepare_image(
     bbox = object_bbox(obj)
     assert bbox is not None
     separation = measure_separation(rgb, obj, source, seg)
-    if not separation.confident:
-        logger.warning("%s", separation.warning(image))
+    warning = separation.warning(image) or separation.cut_off_warning(image)  # a doubtful mask's line comes first
+    if warning:
+        logger.warning("%s", warning)
     return PreparedImage(crop_object(rgb, obj, crop_size, background), obj, rgb, bbox, separation)
 
 
