@@ -68,7 +68,7 @@ def warm_cache(config: TrainConfig) -> None:
     ds = Dataset.open(config.data)
     sigmas = (config.point_sigma_near, config.point_sigma_far)
     for entry in ds.objects("train"):
-        cached_frames(ds.load_object(entry), config.cache_dir, config.image_scale, config.model.encoder_resolution)
+        cached_frames(ds.load_object(entry), config.cache_dir, config.image_scale, config.model)
         mesh = ds.root / entry.path / "mesh.ply"
         cached_points(mesh, entry.id, config.cache_dir, config.model.scene_half_extent, sigmas)
 
@@ -84,7 +84,7 @@ def fscores(model: Any, objects: list[ObjectData], resolution: int) -> dict[str,
     """Mean F-score at 1 cm and 3D affordance mIoU of the meshes predicted from input view 0."""
     f, miou = [], []
     for obj in objects:
-        crops, intrinsics, poses = dataset_views(obj, [0], model.config.encoder_resolution)
+        crops, intrinsics, poses = dataset_views(obj, [0], model.config)
         mesh = model_mesh(model, model.encode_views(crops, intrinsics, poses), resolution)
         score = score_mesh(mesh if len(mesh.faces) else None, true_samples(obj, 0), sample_seed(0, "ladder"))
         f.append(0.0 if score is None else score["fscore_1cm"])

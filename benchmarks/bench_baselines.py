@@ -64,7 +64,7 @@ def view_seconds(
     ds = Dataset.open(data)
     obj = ds.load_object(ds.objects("test")[0])
     inputs = list(range(config.input_views))
-    images, intr, poses = dataset_views(obj, inputs, config.model.encoder_resolution)
+    images, intr, poses = dataset_views(obj, inputs, config.model)
     k = obj.record.intrinsics.scaled(scale)
     target = obj.pose(config.input_views)
     with torch.no_grad():

@@ -30,7 +30,7 @@ from affnerf.predict.loading import load_model
 
 def object_errors(model, obj, views: list[int]) -> dict[str, np.ndarray]:
     """Errors of the camera predicted from each of ``views`` of ``obj``, each crop encoded alone -> name: (V,)."""
-    images, intr, poses = dataset_views(obj, views, model.config.encoder_resolution)
+    images, intr, poses = dataset_views(obj, views, model.config)
     with torch.no_grad():
         encoding = model.encode_views(images[0][:, None], intr[0][:, None], poses[0][:, None])
         return {k: v.numpy() for k, v in model.camera_errors(encoding).items()}

@@ -73,7 +73,7 @@ def main() -> None:
     for entry in interleave_categories(ds.objects(args.split), args.max_objects):
         obj = ds.load_object(entry)
         view = choose_views(len(obj), obj.record.object_id, ProtocolConfig())[0][0]
-        images, intr, poses = dataset_views(obj, [view], size)
+        images, intr, poses = dataset_views(obj, [view], model.config)
         with torch.no_grad():
             codes = model.encode_views(images, intr, poses)
         target = dataset_crop_target(obj, view, size)

@@ -66,8 +66,8 @@ def probe_object(loaded, obj: ObjectData, config: GraspEvalConfig) -> dict:
     """Each variant's grasps on one object: on the true part or not, and their contacts' distance from the mask."""
     model = loaded.model
     view = choose_views(len(obj), obj.record.object_id, ProtocolConfig(input_views=1, target_views=0, seed=0))[0][0]
-    first = model.encode_views(*dataset_views(obj, [view], model.config.encoder_resolution))
-    target = dataset_crop_target(obj, view, model.config.encoder_resolution)
+    first = model.encode_views(*dataset_views(obj, [view], model.config))
+    target = dataset_crop_target(obj, view, model.config)
     fit = invert(model, first, target, np.asarray(loaded.background), InversionConfig(steps=30, seed=view))
     mesh = model_mesh(model, fit.codes, 128, None, model.occupancy(fit.codes))
     mesh = confirmed(mesh, model_mesh(model, first, 128, None, model.occupancy(first)))

@@ -40,7 +40,7 @@ def volume_iou(model: Any, obj: ObjectData, config: TrainConfig, cache: Path) ->
     sigmas = (config.point_sigma_near, config.point_sigma_far)
     points = cached_points(obj.folder / "mesh.ply", obj.record.object_id, cache, config.model.scene_half_extent, sigmas)
     n = split_counts(len(points), 2)[0]
-    crops, intrinsics, poses = dataset_views(obj, [0], model.config.encoder_resolution)
+    crops, intrinsics, poses = dataset_views(obj, [0], model.config)
     encoding = model.encode_views(crops, intrinsics, poses)
     xyz = torch.from_numpy(np.array(points.points[:n]))
     density = model.point_geometry(encoding, torch.zeros(n, dtype=torch.long), xyz)[-1].density

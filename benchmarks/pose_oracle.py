@@ -68,7 +68,7 @@ def fit_rule(shipped: LoadedModel) -> CameraRule:
 
     def rule(obj: ObjectData, poses: torch.Tensor) -> torch.Tensor:
         size = model.config.encoder_resolution
-        images, intr, true = dataset_views(obj, [0], size)
+        images, intr, true = dataset_views(obj, [0], model.config)
         with torch.no_grad():
             codes = model.encode_views(images, intr, true)
         target = dataset_crop_target(obj, 0, size)
@@ -102,7 +102,7 @@ def score(
     conf = np.zeros((model.num_classes, model.num_classes), np.int64)
     psnrs, fscores, labels3d = [], [], []
     for obj in objects:
-        crops, intrinsics, poses = dataset_views(obj, [0], model.config.encoder_resolution)
+        crops, intrinsics, poses = dataset_views(obj, [0], model.config)
         encoding = model.encode_views(crops, intrinsics, rule(obj, poses))
         intr = obj.record.intrinsics.scaled(args.scale)
         for view in np.linspace(1, len(obj) - 1, args.views).round().astype(int):

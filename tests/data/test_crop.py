@@ -40,3 +40,22 @@ def test_an_object_touching_any_side_of_the_frame_is_cut():
     masks[1, 0, 3] = masks[2, 4, 3] = masks[3, 2, 0] = masks[4, 2, 6] = True  # top, bottom, left, right
     assert touches_border(masks).tolist() == [False, True, True, True, True, False]
     assert touches_border(masks[1]) and not touches_border(masks[0])
+
+
+def test_the_checkerboard_marks_exactly_the_crop_pixels_outside_the_image():
+    from affnerf.data.crop import crop_object, crop_window, mark_outside, outside_image
+
+    rgb = np.full((30, 40, 3), 90, np.uint8)
+    mask = np.zeros((30, 40), bool)
+    mask[10:30, 0:12] = True  # runs off the bottom and the left of the frame
+    window = crop_window(mask)
+    outside = outside_image(window, mask.shape, 16)
+    mid = outside.shape[0] // 2
+    assert window[0] < 0 and outside[:, 0].all() and not outside[mid, -1]  # the left column out, the right in
+    assert outside[-1].all() and not outside[mid, mid] and not outside[0, mid]  # the bottom row out, the top in
+    crop = crop_object(rgb, mask, 16, (1.0, 1.0, 1.0))
+    marked = mark_outside(crop, outside, square=2)
+    np.testing.assert_array_equal(marked[~outside], crop[~outside])  # inside the image: untouched
+    values = set(np.unique(marked[outside]).tolist())
+    assert values == {0, 255}  # outside: black and white squares, never the background alone
+    assert not outside_image(crop_window(np.pad(np.ones((4, 4), bool), 10)), (24, 24), 16).any()  # a whole object

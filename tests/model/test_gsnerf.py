@@ -130,7 +130,7 @@ def test_gsnerf_renders_the_tiny_dataset_and_trains_five_steps(train_dataset, ti
     model = build_model(config.model, 12)
     ds = Dataset.open(train_dataset)
     obj = ds.load_object(ds.objects("train")[0])
-    images, intr, poses = dataset_views(obj, [0, 1], config.model.encoder_resolution)
+    images, intr, poses = dataset_views(obj, [0, 1], config.model)
     encoding = model.encode_views(images, intr, poses)
     assert encoding.depth.shape == (1, 2, 8, 8) and torch.isfinite(encoding.depth).all()
     origins = torch.as_tensor(obj.pose(2), dtype=torch.float32)[:3, 3].repeat(5, 1)  # a third view's camera

@@ -90,7 +90,7 @@ def test_semantic_ray_renders_the_tiny_dataset_and_trains_five_steps(train_datas
     assert isinstance(model, SemanticRay)
     ds = Dataset.open(train_dataset)
     obj = ds.load_object(ds.objects("train")[0])
-    images, intr, poses = dataset_views(obj, [0, 1], config.model.encoder_resolution)
+    images, intr, poses = dataset_views(obj, [0, 1], config.model)
     encoding = model.encode_views(images, intr, poses)
     origins = torch.as_tensor(obj.pose(2), dtype=torch.float32)[:3, 3].repeat(5, 1)  # a third view's camera
     dirs = -origins / origins.norm(dim=-1, keepdim=True) + torch.randn(5, 3) * 0.05

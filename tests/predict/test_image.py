@@ -186,3 +186,14 @@ def test_an_object_running_off_the_photo_is_recorded_and_warned_about_once(tmp_p
     assert prepared.separation.confident  # the mask itself is fine: only the view is wanting
     [record] = caplog.records
     assert record.getMessage().startswith(f"{tmp_path / 'cut.png'}: the object reaches the edge of the photo")
+
+
+def test_a_checker_model_sees_where_the_photo_ends_and_a_whole_object_is_cropped_as_before(tmp_path):
+    cut = _photo()
+    cut[30:60, 100:120] = (200, 30, 30)  # runs off the right edge
+    for name, rgb in (("whole.png", _photo()), ("cut.png", cut)):
+        path = _save(tmp_path, name, Image.fromarray(rgb))
+        plain, marked = prepare_image(path, 32), prepare_image(path, 32, outside="checker")
+        changed = (plain.crop != marked.crop).any(-1)
+        assert changed.any() == (name == "cut.png")
+        assert set(np.unique(marked.crop[changed]).tolist()) <= {0, 255}

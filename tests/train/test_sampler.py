@@ -182,3 +182,24 @@ def test_the_trainer_draws_the_configs_outline_and_edge_rays(tiny_train_config):
     whole.setup()
     assert whole.state.sampler.cut_input_weight == 0.0 and SMALL.cut_input_weight == 1.0
     assert SMALL.outline_fraction == 0.4 and PAPER.outline_fraction == 0.0
+
+
+def test_checker_crops_mark_where_a_cut_frames_crop_leaves_it_as_evaluation_does(train_dataset, tmp_path):
+    from affnerf.data.crop import touches_border
+    from affnerf.model.config import ModelConfig
+    from affnerf.model.inputs import dataset_views
+    from affnerf.train.sampler import encoder_crops
+
+    ds = Dataset.open(train_dataset)
+    obj = ds.load_object(ds.objects(split="train")[0])
+    frames = cached_frames(obj, tmp_path, 1.0, 32)
+    cut = [v for v in range(len(frames)) if touches_border(obj.affordance(v) > 0)]
+    whole = [v for v in range(len(frames)) if v not in cut]
+    assert whole and cut
+    for v in whole[:2] + cut[:2]:
+        plain = encoder_crops(frames, np.array([v]))[0]
+        marked = encoder_crops(frames, np.array([v]), "checker")[0]
+        config = ModelConfig(encoder_resolution=32, crop_outside="checker")
+        evaluated = dataset_views(obj, [v], config)[0][0, 0].permute(1, 2, 0).numpy()
+        np.testing.assert_array_equal(marked, np.round(evaluated * 255).astype(np.uint8))  # one crop rule everywhere
+        assert v not in cut or (marked != plain).any()  # a cut object's crop always leaves its frame

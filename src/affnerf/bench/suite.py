@@ -95,7 +95,7 @@ def _inference(config: BenchConfig, root: Path, device: torch.device, repeats: i
     loaded = load_model(run, device)
     ds = Dataset.open(root)
     obj = ds.load_object(ds.objects()[0])
-    images, _, _ = dataset_views(obj, [0], loaded.model.config.encoder_resolution)
+    images, _, _ = dataset_views(obj, [0], loaded.model.config)
     crop = np.round(images[0, 0].permute(1, 2, 0).numpy() * 255).astype(np.uint8)
     views, size = (5, (200, 150)) if quick else (20, (400, 300))
     return {"model": str(loaded.path), **measure_inference(loaded, crop, repeats, views, size, 128)}

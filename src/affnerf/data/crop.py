@@ -12,6 +12,9 @@ from PIL import Image
 
 #: Fraction of the box side added on each side of the object.
 CROP_MARGIN = 0.08
+#: Side in crop pixels of the squares of the checkerboard that marks where a crop leaves the image
+#: (:func:`mark_outside`).
+CHECKER_SQUARE = 4
 
 
 def object_bbox(mask: np.ndarray) -> tuple[int, int, int, int] | None:
@@ -130,3 +133,44 @@ def crop_object(
     canvas = Image.new("RGB", (side, side), tuple(int(c) for c in bg))
     canvas.paste(Image.fromarray(np.ascontiguousarray(clean)), (-left, -top))
     return np.array(canvas.resize((size, size), Image.BILINEAR))
+
+
+def crop_outside(
+    image_shape: tuple[int, int], intrinsics: np.ndarray, crop_k: np.ndarray | tuple[float, ...], size: int
+) -> np.ndarray:
+    """(size, size) bool: the pixels of a crop (intrinsics ``crop_k``) of an image of ``image_shape`` (H, W) and
+    ``intrinsics`` whose centre falls outside that image, by :func:`resample_to_crop`'s nearest-pixel rule."""
+    return ~resample_to_crop(np.ones(image_shape, bool), np.asarray(intrinsics, np.float64), crop_k, size)
+
+
+def outside_image(window: tuple[int, int, int], image_shape: tuple[int, int], size: int) -> np.ndarray:
+    """:func:`crop_outside` of the crop of ``window`` (left, top, side, from :func:`crop_window`).
+
+    Example:
+        >>> outside_image((-2, 0, 4), (4, 4), 4)[0].tolist()
+        [True, True, False, False]
+    """
+    unit = np.array([1.0, 1.0, 0.0, 0.0])
+    return crop_outside(image_shape, unit, crop_intrinsics(1.0, 1.0, 0.0, 0.0, window, size), size)
+
+
+def mark_outside(crop: np.ndarray, outside: np.ndarray, square: int = CHECKER_SQUARE) -> np.ndarray:
+    """A crop whose pixels outside the image show a black and white checkerboard instead of the background, so an
+    encoder can tell "the image ends here" from "nothing is there" (an object cut off by the frame).
+
+    Args:
+        crop: (S, S, 3) uint8.
+        outside: (S, S) bool, from :func:`outside_image`.
+        square: side of the checkerboard's squares in pixels.
+
+    Returns:
+        (S, S, 3) uint8, a new array.
+
+    Example:
+        >>> marked = mark_outside(np.full((4, 4, 3), 9, np.uint8), np.eye(4, dtype=bool), square=1)
+        >>> marked[..., 0].tolist()
+        [[255, 9, 9, 9], [9, 255, 9, 9], [9, 9, 255, 9], [9, 9, 9, 255]]
+    """
+    rows, cols = np.indices(outside.shape) // square
+    checker = np.where((rows + cols) % 2 == 0, 255, 0).astype(np.uint8)
+    return np.where(outside[..., None], checker[..., None], crop)

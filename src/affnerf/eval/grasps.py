@@ -150,7 +150,7 @@ def predict_object(loaded: LoadedModel, obj: ObjectData, view: int, fit_steps: i
     """Encode one view of a dataset object, then (``fit_steps`` > 0) fit the codes to it for that many steps of
     test-time inversion, as ``affnerf predict`` does."""
     model = loaded.model
-    images, intr, poses = dataset_views(obj, [view], model.config.encoder_resolution)
+    images, intr, poses = dataset_views(obj, [view], model.config)
     first = model.encode_views(images.to(loaded.device), intr.to(loaded.device), poses.to(loaded.device))
     if fit_steps <= 0:
         return Prediction(model, first, first, False)

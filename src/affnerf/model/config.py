@@ -93,6 +93,12 @@ class ModelConfig:
             deviation this times the spread (standard deviation) of that code dimension over the step's objects
             (0 = none, the paper). Beyond the paper: the decoder learns to give a plausible object for codes near
             the training objects' ones, as an encoder's code for a new object is (a denoising regulariser).
+        crop_outside: what the encoders' crop shows where it leaves the image (an object near or cut off by the
+            frame's edge): ``background`` (the paper's crop: the background colour, so a cut-off object looks like
+            a whole one with a straight side) or ``checker``, beyond the paper: a black and white checkerboard
+            (:func:`affnerf.data.crop.mark_outside`), so the encoders can tell where the view ends from where the
+            object does. In training, in evaluation and in ``predict`` alike; the fit's target crop is never
+            marked.
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """
@@ -126,6 +132,7 @@ class ModelConfig:
     encoders: Literal["two", "one"] = "two"
     shape_pooling: Literal["mean", "keypoints"] = "mean"
     code_noise: float = 0.0
+    crop_outside: Literal["background", "checker"] = "background"
 
 
 #: Fields of :class:`ModelConfig` that change how a trained model is sampled or used, not its weights: a checkpoint

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.data.crop import crop_object, object_bbox, touches_border
+from affnerf.data.crop import crop_object, crop_window, mark_outside, object_bbox, outside_image, touches_border
 from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
 from affnerf.predict.segment import (
@@ -248,6 +248,7 @@ def prepare_image(
     segment: SegmentMethod = "auto",
     segmenter: Path | None = None,
     box: Box | None = None,
+    outside: str = "background",
 ) -> PreparedImage:
     """Load a photo and prepare it for the encoders.
 
@@ -261,6 +262,8 @@ def prepare_image(
             ``segmenter``, ``salient``, ``grabcut``, ``uniform`` or ``none`` (the whole image is the object).
         segmenter: an object segmenter file (``affnerf train-segmenter``) for ``segmenter``, and for ``auto``
             before the salient model; ``None`` for the shipped one, ``segment.NO_SEGMENTER`` for none.
+        box: confine the separation to this rectangle (x0, y0, x1, y1).
+        outside: the model's ``crop_outside``: ``checker`` marks where the crop leaves the photo.
 
     Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), else when
     the object reaches the image's edge (``Separation.cut_off``), and when ``auto`` falls back because the optional
@@ -287,7 +290,10 @@ def prepare_image(
     warning = separation.warning(image) or separation.cut_off_warning(image)  # a doubtful mask's line comes first
     if warning:
         logger.warning("%s", warning)
-    return PreparedImage(crop_object(rgb, obj, crop_size, background), obj, rgb, bbox, separation)
+    crop = crop_object(rgb, obj, crop_size, background)
+    if outside == "checker":
+        crop = mark_outside(crop, outside_image(crop_window(obj), obj.shape, crop_size))
+    return PreparedImage(crop, obj, rgb, bbox, separation)
 
 
 def save_mask(path: Path, mask: np.ndarray) -> None:

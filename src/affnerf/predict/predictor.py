@@ -139,8 +139,11 @@ class Predictor:
         """Prepare a photo (separate the object by ``mask`` or the ``segment`` method, which may use the object
         segmenter file ``segmenter``: ``None`` for the shipped one, ``segment.NO_SEGMENTER`` for none; inside the
         (x0, y0, x1, y1) rectangle ``box`` when given; crop, centre, resize) and encode it."""
-        size = self.loaded.model.config.encoder_resolution
-        prepared = prepare_image(Path(image), size, self.loaded.background, mask, segment, segmenter, box)
+        config = self.loaded.model.config
+        prepared = prepare_image(
+            Path(image), config.encoder_resolution, self.loaded.background, mask, segment, segmenter, box,
+            config.crop_outside,
+        )  # fmt: skip
         return EncodedObject(self.encode_crops(prepared.crop[None]), prepared)
 
     def fit(

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
-from affnerf.data.crop import resample_to_crop
+from affnerf.data.crop import crop_outside, mark_outside, resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames, part_edge_index
 from affnerf.train.pixels import draw_edge_pixels, draw_pixels, input_view_chances, other_views
@@ -92,6 +92,7 @@ class RaySampler:
         edge_radius: their band's half-width in pixels of the frames.
         cut_input_weight: how much a frame whose object touches the image border counts, against a whole one, in
             the choice of encoded views (:func:`input_view_chances`); 1 keeps the uniform choice and its draws.
+        outside: the model's ``crop_outside``: ``checker`` marks where each encoded crop leaves its frame.
     """
 
     def __init__(
@@ -109,6 +110,7 @@ class RaySampler:
         edge_fraction: float = 0.0,
         edge_radius: int = 0,
         cut_input_weight: float = 1.0,
+        outside: str = "background",
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
@@ -134,7 +136,7 @@ class RaySampler:
         self.outline_fraction, self.outline_radius = outline_fraction, outline_radius
         self.edge_fraction, self.edge_radius = edge_fraction, edge_radius
         self._edges = [part_edge_index(np.asarray(o.labels)) for o in objects] if edge_fraction else []
-        self.cut_input_weight = cut_input_weight
+        self.cut_input_weight, self.outside = cut_input_weight, outside
         self._input_chances = (
             [input_view_chances(np.asarray(o.labels), cut_input_weight, input_views) for o in objects]
             if cut_input_weight < 1
@@ -164,6 +166,7 @@ class RaySampler:
             config.edge_fraction,
             config.edge_radius,
             config.cut_input_weight,
+            config.model.crop_outside,
         )
 
     def _epoch_order(self, epoch: int) -> np.ndarray:
@@ -208,9 +211,8 @@ class RaySampler:
                 edges, shape = self._edges[oi], obj.labels.shape[1:]
                 u, v = draw_edge_pixels(self.rng, edges, shape, views, on_edge, u, v, self.edge_radius)
             crop_depth, crop_labels = crop_maps(obj, enc)
-            images.append(
-                (np.asarray(obj.crops[enc]), obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)
-            )
+            crops = encoder_crops(obj, enc, self.outside)
+            images.append((crops, obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels))
             enc_views.append(enc)
             parts.append((slot, obj, views, u, v))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
@@ -223,6 +225,17 @@ class RaySampler:
         self.epoch, self.position = int(state["epoch"]), int(state["position"])
         self.rng.bit_generator.state = state["rng"]
         self._order = self._epoch_order(self.epoch)
+
+
+def encoder_crops(obj: ObjectFrames, enc: np.ndarray, outside: str = "background") -> np.ndarray:
+    """(V, S, S, 3) uint8 cached crops of the encoded views ``enc``, their pixels outside the frame marked by a
+    checkerboard when ``outside`` is ``checker`` (``ModelConfig.crop_outside``)."""
+    crops = np.asarray(obj.crops[enc])
+    if outside != "checker":
+        return crops
+    shape, size = obj.labels.shape[1:], crops.shape[1]
+    outside_masks = [crop_outside(shape, obj.intrinsics, obj.crop_intrinsics[e], size) for e in enc]
+    return np.stack([mark_outside(c, m) for c, m in zip(crops, outside_masks, strict=True)])
 
 
 def crop_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

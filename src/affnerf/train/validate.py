@@ -58,7 +58,7 @@ def validate(
     try:
         for obj in objects:
             inputs = list(range(input_views))
-            crops, intrinsics, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
+            crops, intrinsics, poses = dataset_views(obj, inputs, model.config)
             encoding = model.encode_views(crops.to(device), intrinsics.to(device), poses.to(device))
             intr = obj.record.intrinsics.scaled(scale)
             size = (intr.width, intr.height)

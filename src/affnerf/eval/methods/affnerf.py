@@ -49,7 +49,7 @@ class ConditionedNeRFMethod:
         """The object's encoding from its input views (AFF-NeRF averages the views' codes)."""
         model = self.loaded.model
         device = self.loaded.device
-        images, intr, poses = dataset_views(obj, inputs, model.config.encoder_resolution)
+        images, intr, poses = dataset_views(obj, inputs, model.config)
         return model.encode_views(images.to(device), intr.to(device), poses.to(device))
 
     def encoded(self, obj: ObjectData, inputs: list[int]) -> object:

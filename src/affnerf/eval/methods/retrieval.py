@@ -90,7 +90,7 @@ class RetrievalMethod:
         if views is None:
             views = np.linspace(0, len(obj) - 1, self.views_per_object).round().astype(int).tolist()
         model = self.loaded.model
-        images, intr, poses = dataset_views(obj, views, model.config.encoder_resolution)
+        images, intr, poses = dataset_views(obj, views, model.config)
         codes = model.encode_views(
             images.to(self.loaded.device), intr.to(self.loaded.device), poses.to(self.loaded.device)
         )
