@@ -83,8 +83,10 @@ class TrainConfig:
             counts, against a frame that shows the whole object, when a step chooses the view its encoders see
             (rays still come from every other view). 1 = every frame alike (the paper); 0 = only whole views where
             the object has enough of them. Cut inputs are common in the procedural data (41 % of cabinet frames, a
-            quarter of buckets' and eyeglasses') and the shipped model predicts worse from them (stability_64:
-            −0.035 mIoU on average against the same object's whole views).
+            quarter of buckets' and eyeglasses') and the shipped model predicts worse from them (−0.035 mIoU against
+            the same object's whole views). 0 was behind the preset from scratch on two seeds (val40 mIoU −0.009 /
+            −0.001, test64 −0.003 / −0.009; test cabinets, five of eight seen cut, −0.077 / −0.038): the model needs
+            cut views in training to read cut ones at test time (benchmarks/results/cut_inputs.md).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
