@@ -72,7 +72,9 @@ def main() -> None:
     categories = paired_differences(args.data, stability)
     pairs = np.concatenate([c.pop("_pairs") for c in categories.values()])
     overall = {"objects_with_both": len(pairs), "miou_cut_minus_whole": float(pairs[:, 0].mean()),
-               "fscore_1cm_cut_minus_whole": float(pairs[:, 1].mean())}  # fmt: skip
+               "fscore_1cm_cut_minus_whole": float(pairs[:, 1].mean()),
+               "objects_worse_from_cut_views_miou": int((pairs[:, 0] < 0).sum()),
+               "objects_worse_from_cut_views_fscore": int((pairs[:, 1] < 0).sum())}  # fmt: skip
     result = {"stability": str(args.stability), "categories": categories, "overall": overall,
               "cut_frame_shares": cut_frame_shares(args.data)}  # fmt: skip
     args.out.write_text(json.dumps(result, indent=1) + "\n")

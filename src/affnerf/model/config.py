@@ -98,7 +98,8 @@ class ModelConfig:
             a whole one with a straight side) or ``checker``, beyond the paper: a black and white checkerboard
             (:func:`affnerf.data.crop.mark_outside`), so the encoders can tell where the view ends from where the
             object does. In training, in evaluation and in ``predict`` alike; the fit's target crop is never
-            marked.
+            marked. From scratch beside the preset on two seeds it was level to behind (val40 mIoU −0.002 /
+            −0.007, test64 −0.003 / −0.006; benchmarks/results/cut_inputs.md), so neither preset uses it.
         occupancy_density: density (per metre) above which a cell of an encoded object's occupancy grid counts as
             occupied (empty-space skipping at inference; the grid is dilated by one cell so thin parts survive).
     """

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Two `small` runs from scratch, side by side, one core each, on the 13,000-step schedule whose seed-0 and seed-1
+# preset runs are part_edges.json's `preset_s0` / `preset_s1` (deterministic across the development VMs, so the
+# preset need not be trained again), each with its own training options; then both calibrated (32 validation
+# objects) and scored on val40 and, unless TEST64=0, on the 64 test objects, side by side. Results are gathered by
+# collect_stages.py with those preset runs as references (see results/termination_scratch.md).
+#   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] \
+#       A="NAME --seed 0 --some-option V" B="NAME --seed 1 --some-option V" benchmarks/scratch_pair.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
+W="${WORK:-benchmarks/.work/scratch_pair}"
+LIMIT="${LIMIT:-60}"  # a safety net: the runs end on their step count
+STEPS="${STEPS:-13000}"
+CACHE="${CACHE:-$W/cache}"
+read -r -a first <<< "${A:?A=\"NAME [TRAIN OPTIONS...]\"}"
+read -r -a second <<< "${B:?B=\"NAME [TRAIN OPTIONS...]\"}"
+export OMP_NUM_THREADS=1
+# shellcheck source=benchmarks/side_by_side.sh
+source benchmarks/side_by_side.sh
+scored_pair "${first[0]}" "$STEPS" "${first[@]:1}" -- "${second[0]}" "$STEPS" "${second[@]:1}"
+if [ "${TEST64:-1}" = 1 ]; then
+    test64 "${first[0]}" "$W/${first[0]}" &
+    test64 "${second[0]}" "$W/${second[0]}" &
+    wait
+fi
