@@ -10,28 +10,13 @@
 # RUNS: two runs, each WEIGHT:SEED[:OUTSIDE] (the results' runs: "0:0 0:1", then "1:0:checker 1:1:checker").
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
-W="${WORK:-benchmarks/.work/cut_inputs}"
-LIMIT="${LIMIT:-60}"  # a safety net: the runs end on their step count
-STEPS="${STEPS:-13000}"
-CACHE="${CACHE:-$W/cache}"
 read -r -a runs <<< "${RUNS:-0:0 0:1}"
-export OMP_NUM_THREADS=1
-# shellcheck source=benchmarks/side_by_side.sh
-source benchmarks/side_by_side.sh
-names=()
-args=()
+options=()
 for spec in "${runs[@]}"; do
     IFS=: read -r weight seed outside <<< "$spec"
     outside="${outside:-background}"
     name="cut${weight}_s$seed"
     [ "$outside" = background ] || name="${outside}_$name"
-    names+=("$name")
-    args+=("$name" "$STEPS" --seed "$seed" --cut-input-weight "$weight" --model.crop-outside "$outside")
+    options+=("$name --seed $seed --cut-input-weight $weight --model.crop-outside $outside")
 done
-scored_pair "${args[@]:0:8}" -- "${args[@]:8:8}"
-if [ "${TEST64:-1}" = 1 ]; then
-    test64 "${names[0]}" "$W/${names[0]}" &
-    test64 "${names[1]}" "$W/${names[1]}" &
-    wait
-fi
+A="${options[0]}" B="${options[1]}" WORK="${WORK:-benchmarks/.work/cut_inputs}" exec benchmarks/scratch_pair.sh

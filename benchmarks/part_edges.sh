@@ -10,30 +10,14 @@
 # leaves the object's uniform share at the preset's 0.5 and takes the edges' rays from the uniform ones instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
-W="${WORK:-benchmarks/.work/part_edges}"
-LIMIT="${LIMIT:-60}"  # a safety net: the runs end on their step count
-STEPS="${STEPS:-13000}"
-CACHE="${CACHE:-$W/cache}"
 read -r -a runs <<< "${RUNS:-0:1:0 0.2:1:0}"
-export OMP_NUM_THREADS=1
-# shellcheck source=benchmarks/side_by_side.sh
-source benchmarks/side_by_side.sh
-names=()
-args=()
+options=()
 for spec in "${runs[@]}"; do
     IFS=: read -r fraction radius seed foreground <<< "$spec"
     foreground="${foreground:-0.5}"
     name="edges${fraction}r${radius}_s$seed"
     [ "$fraction" = 0 ] && name="preset_s$seed"
     [ "$foreground" = 0.5 ] || name="${name}_fg$foreground"
-    names+=("$name")
-    args+=("$name" "$STEPS" --seed "$seed" --edge-fraction "$fraction" --edge-radius "$radius"
-        --foreground-fraction "$foreground")
+    options+=("$name --seed $seed --edge-fraction $fraction --edge-radius $radius --foreground-fraction $foreground")
 done
-scored_pair "${args[@]:0:10}" -- "${args[@]:10:10}"
-if [ "${TEST64:-1}" = 1 ]; then
-    test64 "${names[0]}" "$W/${names[0]}" &
-    test64 "${names[1]}" "$W/${names[1]}" &
-    wait
-fi
+A="${options[0]}" B="${options[1]}" WORK="${WORK:-benchmarks/.work/part_edges}" exec benchmarks/scratch_pair.sh
