@@ -1,7 +1,8 @@
 """Object-centred square crops: what the encoders see, in training and at prediction alike.
 
 A crop is the square around the object's bounding box, enlarged by a margin, filled with the background colour
-where it leaves the image, and resized. Encoding crops rather than whole frames removes the camera's distance
+where it leaves the image (or, for a model whose ``crop_outside`` is ``checker``, marked there by a checkerboard),
+and resized. Encoding crops rather than whole frames removes the camera's distance
 and framing from what the codes must explain, and lets any photo be prepared the same way.
 """
 
@@ -113,6 +114,7 @@ def crop_object(
     size: int,
     background: tuple[float, float, float] | np.ndarray,
     margin: float = CROP_MARGIN,
+    outside: str = "background",
 ) -> np.ndarray:
     """The object-centred square crop of an image.
 
@@ -123,6 +125,8 @@ def crop_object(
         background: RGB in [0, 1] filling what lies outside the image (and replacing non-object pixels, so the
             crop shows the object on a clean background whatever the photo's surroundings).
         margin: see :func:`square_box`.
+        outside: what the crop shows where it leaves the image (``ModelConfig.crop_outside``): ``background`` or a
+            ``checker`` board (:func:`mark_outside`).
 
     Returns:
         (size, size, 3) uint8, the window of :func:`crop_window` resized.
@@ -132,7 +136,10 @@ def crop_object(
     left, top, side = crop_window(mask, margin)
     canvas = Image.new("RGB", (side, side), tuple(int(c) for c in bg))
     canvas.paste(Image.fromarray(np.ascontiguousarray(clean)), (-left, -top))
-    return np.array(canvas.resize((size, size), Image.BILINEAR))
+    crop = np.array(canvas.resize((size, size), Image.BILINEAR))
+    if outside == "checker":
+        return mark_outside(crop, outside_image((left, top, side), mask.shape, size))
+    return crop
 
 
 def crop_outside(

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
-from affnerf.data.crop import crop_intrinsics, crop_object, crop_window, mark_outside, outside_image
+from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
 from affnerf.data.dataset import ObjectData
 from affnerf.model.config import ModelConfig
 
@@ -25,11 +25,8 @@ def dataset_views(
     crops, intr, poses = [], [], []
     for view in views:
         rgb, mask = obj.rgb(view), obj.affordance(view) > 0
-        crop, window = crop_object(rgb, mask, size, obj.record.background_color), crop_window(mask)
-        crops.append(
-            mark_outside(crop, outside_image(window, mask.shape, size)) if config.crop_outside == "checker" else crop
-        )
-        intr.append(crop_intrinsics(k.fl_x, k.fl_y, k.cx, k.cy, window, size))
+        crops.append(crop_object(rgb, mask, size, obj.record.background_color, outside=config.crop_outside))
+        intr.append(crop_intrinsics(k.fl_x, k.fl_y, k.cx, k.cy, crop_window(mask), size))
         poses.append(obj.pose(view))
     images = torch.from_numpy(np.stack(crops)).permute(0, 3, 1, 2).float()[None] / 255.0
     return images, torch.tensor([intr], dtype=torch.float32), torch.from_numpy(np.stack(poses)).float()[None]

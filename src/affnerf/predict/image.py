@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
-from affnerf.data.crop import crop_object, crop_window, mark_outside, object_bbox, outside_image, touches_border
+from affnerf.data.crop import crop_object, object_bbox, touches_border
 from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
 from affnerf.predict.segment import (
@@ -290,10 +290,7 @@ def prepare_image(
     warning = separation.warning(image) or separation.cut_off_warning(image)  # a doubtful mask's line comes first
     if warning:
         logger.warning("%s", warning)
-    crop = crop_object(rgb, obj, crop_size, background)
-    if outside == "checker":
-        crop = mark_outside(crop, outside_image(crop_window(obj), obj.shape, crop_size))
-    return PreparedImage(crop, obj, rgb, bbox, separation)
+    return PreparedImage(crop_object(rgb, obj, crop_size, background, outside=outside), obj, rgb, bbox, separation)
 
 
 def save_mask(path: Path, mask: np.ndarray) -> None:
