@@ -96,7 +96,10 @@ class TrainConfig:
             paper); uses the dataset's depth maps. It thickens outlines (benchmarks/results/fine_tune_losses.md).
         termination_weight: weight of the mean distance in metres between where each object ray's rendering weight
             lies and the true surface, Σ w·|t − depth| (0 = off, the paper): places density on the surface
-            without the depth L1's push towards opacity.
+            without the depth L1's push towards opacity. At 1.0 from the first step, beside the ``small`` preset on
+            two seeds, mIoU +0.016 / +0.020 (val40) and +0.012 / +0.024 (test64), PA and PSNR up, object mIoU
+            −0.003 to −0.022 (benchmarks/results/termination_scratch.md); not yet in the preset (the shipped weights
+            predate the measurement).
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
