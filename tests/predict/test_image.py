@@ -178,9 +178,9 @@ def test_an_object_running_off_the_photo_is_recorded_and_warned_about_once(tmp_p
     cut = whole.copy()
     cut[30:60, 100:120] = (200, 30, 30)  # the box now runs off the right edge
     with caplog.at_level(logging.WARNING, logger="affnerf.predict.image"):
-        inside = prepare_image(_save(tmp_path, "whole.png", Image.fromarray(whole)), 32)
+        inside = prepare_image(_save(tmp_path, "whole.png", Image.fromarray(whole)), 32, segment="uniform")
         assert not caplog.records
-        prepared = prepare_image(_save(tmp_path, "cut.png", Image.fromarray(cut)), 32)
+        prepared = prepare_image(_save(tmp_path, "cut.png", Image.fromarray(cut)), 32, segment="uniform")
     assert not inside.separation.cut_off and inside.separation.to_json()["cut_off"] is False
     assert prepared.separation.cut_off and prepared.separation.to_json()["cut_off"] is True
     assert prepared.separation.confident  # the mask itself is fine: only the view is wanting
@@ -193,7 +193,8 @@ def test_a_checker_model_sees_where_the_photo_ends_and_a_whole_object_is_cropped
     cut[30:60, 100:120] = (200, 30, 30)  # runs off the right edge
     for name, rgb in (("whole.png", _photo()), ("cut.png", cut)):
         path = _save(tmp_path, name, Image.fromarray(rgb))
-        plain, marked = prepare_image(path, 32), prepare_image(path, 32, outside="checker")
+        plain = prepare_image(path, 32, segment="uniform")
+        marked = prepare_image(path, 32, segment="uniform", outside="checker")
         changed = (plain.crop != marked.crop).any(-1)
         assert changed.any() == (name == "cut.png")
         assert set(np.unique(marked.crop[changed]).tolist()) <= {0, 255}
