@@ -194,11 +194,7 @@ class RaySampler:
         images, enc_views, parts = [], [], []
         for slot, (oi, count) in enumerate(zip(chosen, counts, strict=True)):
             obj = self.objects[oi]
-            chances = self._input_chances[oi]
-            if chances is None:
-                enc = self.rng.choice(len(obj), self.input_views, replace=False)
-            else:
-                enc = self.rng.choice(len(obj), self.input_views, replace=False, p=chances)
+            enc = self.rng.choice(len(obj), self.input_views, replace=False, p=self._input_chances[oi])
             views = other_views(self.rng, len(obj), enc, int(count))
             share = self.rng.random(int(count))
             fg = share < self.foreground_fraction
