@@ -39,6 +39,15 @@ def test_checkpoints_every_at_the_end_and_when_out_of_time():
     assert saved == [4, 6, 8, 10]
 
 
+def test_every_zero_acts_only_at_the_end_and_when_out_of_time():
+    assert [s for s in range(1, 11) if due(s, 0, 10)] == [10]
+    saved: list[int] = []
+    hook = SaveCheckpoints(every=0, end=10, save=saved.append)
+    for step in range(1, 11):
+        hook(step=step, outputs={}, scalars={}, out_of_time=step == 6)
+    assert saved == [6, 10]
+
+
 def test_log_scalars_writes_lines_and_replaces_the_run_scalars(tmp_path):
     config = TrainConfig(data=tmp_path, out=tmp_path, steps=3, log_every=2, rays_per_step=10)
     logger = MetricsLogger(tmp_path, enabled=True)

@@ -129,9 +129,9 @@ class TrainConfig:
             stage it moved neither the 2D nor the 3D scores nor the part grasps (results/part_balance.md).
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
-        checkpoint_every: steps between checkpoints.
+        checkpoint_every: steps between checkpoints (0 = only at the end of the run and when out of time).
         keep_checkpoints: how many recent checkpoints to keep.
-        log_every: steps between logged scalars.
+        log_every: steps between logged scalars (0 = only at the last step).
         val_every: steps between validation renders (0 = never).
         val_objects: validation objects rendered each time.
         val_scale: resolution of validation renders as a fraction of the dataset's images.
@@ -310,6 +310,14 @@ def check_options(config: TrainConfig) -> None:
         )
     if not 0 <= config.cut_input_weight <= 1:
         raise AffnerfError(f"--cut-input-weight is in [0, 1] (1 = every frame alike), not {config.cut_input_weight}")
+    intervals = {
+        "checkpoint-every": config.checkpoint_every,
+        "log-every": config.log_every,
+        "val-every": config.val_every,
+    }
+    for name, every in intervals.items():
+        if every < 0:
+            raise AffnerfError(f"--{name} is a number of steps (>= 0; 0 = only at the end), not {every}")
     if config.optim.warmup_steps < 0:
         raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")
 

@@ -48,13 +48,15 @@ class Hook(Protocol):
 
 
 def due(step: int, every: int, last: int) -> bool:
-    """Whether something done every ``every`` steps, and at step ``last``, is done at ``step``.
+    """Whether something done every ``every`` steps (0 = only at ``last``), and at step ``last``, is done at ``step``.
 
     Example:
         >>> [s for s in range(1, 8) if due(s, 3, 7)]
         [3, 6, 7]
+        >>> [s for s in range(1, 8) if due(s, 0, 7)]
+        [7]
     """
-    return step % every == 0 or step == last
+    return (every > 0 and step % every == 0) or step == last
 
 
 class LogScalars:
