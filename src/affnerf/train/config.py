@@ -98,8 +98,8 @@ class TrainConfig:
             lies and the true surface, Σ w·|t − depth| (0 = off, the paper): places density on the surface
             without the depth L1's push towards opacity. At 1.0 from the first step, beside the ``small`` preset on
             two seeds, mIoU +0.016 / +0.020 (val40) and +0.012 / +0.024 (test64), PA and PSNR up, object mIoU
-            −0.003 to −0.022 (benchmarks/results/termination_scratch.md); not yet in the preset (the shipped weights
-            predate the measurement).
+            −0.003 to −0.022 (benchmarks/results/termination_scratch.md), for 0.6 % more time a step
+            (termination_step_cost.json); the ``small`` preset's value since 2026-12-06.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
@@ -222,7 +222,9 @@ PAPER = TrainConfig(data=Path("."), out=Path("."))
 #: learning per step (results/shared_field.md, two seeds). Of a step's rays 40 % are drawn near the object's outline
 #: instead of uniformly (results/outline_rays.md, two seeds). The shape encoder also codes where its features peak
 #: in the crop (shape_pooling "keypoints", a spatial soft-argmax; results/shape_pooling.md, two seeds: +0.015 mIoU,
-#: +0.019 F@1cm on average over validation and test objects at equal steps and time).
+#: +0.019 F@1cm on average over validation and test objects at equal steps and time). Each object ray's rendering
+#: weight is pulled onto the true surface from the first step (termination_weight; results/termination_scratch.md,
+#: two seeds: mIoU +0.012 to +0.024 at equal steps, 0.6 % more time a step).
 SMALL = replace(
     PAPER,
     config="small",
@@ -248,6 +250,7 @@ SMALL = replace(
     affordance_weight=4e-2,
     points_weight=0.1,
     points_per_object=512,
+    termination_weight=1.0,
     image_scale=0.25,
     checkpoint_every=500,
     log_every=50,
