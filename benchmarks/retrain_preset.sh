@@ -11,12 +11,14 @@
 # cores under torchrun), calibrated and scored the same way. SKIP_TRAINING=1 only calibrates and evaluates;
 # SHIPPED_SCORES=0 leaves out the shipped weights' val40 and test64 (the evaluation is deterministic:
 # results/retrain_keypoints.json has those of the weights shipped since 2026-12-05, retrain_preset.json the ones before). Writes W/retrain_preset.json: every score's metrics without confusion
-# matrices.
+# matrices. EXTRA: more `affnerf train` options for the training (for instance EXTRA="--termination-weight 1.0",
+# results/retrain_termination.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DATA="${DATA:?dataset: affnerf data generate --objects-per-category 80 --views 30 --seed 0}"
 W="${WORK:-benchmarks/.work/retrain_preset}"
 STEPS="${STEPS:-20500}"
+read -r -a extra <<< "${EXTRA:-}"
 SHIPPED=src/affnerf/weights/affnerf-small.pt
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
@@ -26,7 +28,7 @@ mkdir -p "$W"
 if [ "${SKIP_TRAINING:-0}" != 1 ]; then
     .venv/bin/torchrun --standalone --nproc_per_node 2 -m affnerf.cli.main train --data "$DATA" --out "$W/run" \
         --config small --steps "$STEPS" --device cpu --checkpoint-every 1000 --keep-checkpoints 3 --val-every 0 \
-        --cache-dir "$W/cache" --no-progress
+        --cache-dir "$W/cache" --no-progress "${extra[@]}"
 fi
 .venv/bin/affnerf eval calibrate --run "$W/run" --data "$DATA" --max-objects 32 --device cpu
 rm -rf "$W/val40_run" "$W/val40_shipped" "$W/test64_run" "$W/test64_shipped"

@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Two `small` runs from scratch, side by side, one core each, on the 13,000-step schedule whose seed-0 and seed-1
-# preset runs are termination_scratch.json's `termination1_s0` / `termination1_s1` (the preset since 2026-12-06;
-# before, part_edges.json's `preset_s0` / `preset_s1`: deterministic across the development VMs, so the preset
-# need not be trained again), each with its own training options; then both calibrated (32 validation
+# preset runs are part_edges.json's `preset_s0` / `preset_s1` (deterministic across the development VMs, so the
+# preset need not be trained again), each with its own training options; then both calibrated (32 validation
 # objects) and scored on val40 and, unless TEST64=0, on the 64 test objects, side by side. Results are gathered by
 # collect_stages.py with those preset runs as references (see results/termination_scratch.md).
 #   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] \

@@ -99,7 +99,9 @@ class TrainConfig:
             without the depth L1's push towards opacity. At 1.0 from the first step, beside the ``small`` preset on
             two seeds, mIoU +0.016 / +0.020 (val40) and +0.012 / +0.024 (test64), PA and PSNR up, object mIoU
             −0.003 to −0.022 (benchmarks/results/termination_scratch.md), for 0.6 % more time a step
-            (termination_step_cost.json); the ``small`` preset's value since 2026-12-06.
+            (termination_step_cost.json). Trained the shipped model's way (34,000 steps of two processes) it was
+            mixed: val40 mIoU +0.017 and F@1cm +0.049, test64 mIoU −0.020 and object mIoU −0.040, pens −0.095 on
+            both (retrain_termination.md); so not in the preset.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
@@ -222,9 +224,7 @@ PAPER = TrainConfig(data=Path("."), out=Path("."))
 #: learning per step (results/shared_field.md, two seeds). Of a step's rays 40 % are drawn near the object's outline
 #: instead of uniformly (results/outline_rays.md, two seeds). The shape encoder also codes where its features peak
 #: in the crop (shape_pooling "keypoints", a spatial soft-argmax; results/shape_pooling.md, two seeds: +0.015 mIoU,
-#: +0.019 F@1cm on average over validation and test objects at equal steps and time). Each object ray's rendering
-#: weight is pulled onto the true surface from the first step (termination_weight; results/termination_scratch.md,
-#: two seeds: mIoU +0.012 to +0.024 at equal steps, 0.6 % more time a step).
+#: +0.019 F@1cm on average over validation and test objects at equal steps and time).
 SMALL = replace(
     PAPER,
     config="small",
@@ -250,7 +250,6 @@ SMALL = replace(
     affordance_weight=4e-2,
     points_weight=0.1,
     points_per_object=512,
-    termination_weight=1.0,
     image_scale=0.25,
     checkpoint_every=500,
     log_every=50,
