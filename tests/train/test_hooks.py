@@ -48,6 +48,16 @@ def test_every_zero_acts_only_at_the_end_and_when_out_of_time():
     assert saved == [6, 10]
 
 
+def test_a_negative_interval_is_refused_with_one_line(tmp_path, capsys):
+    from affnerf.cli.main import main
+
+    argv = ["train", "--data", str(tmp_path), "--out", str(tmp_path / "run"), "--steps", "10"]
+    for option in ("--checkpoint-every", "--log-every", "--val-every"):
+        assert main([*argv, option, "-5"]) == 2
+        assert f"{option} is a number of steps (>= 0; 0 = only at the end), not -5" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
 def test_log_scalars_writes_lines_and_replaces_the_run_scalars(tmp_path):
     config = TrainConfig(data=tmp_path, out=tmp_path, steps=3, log_every=2, rays_per_step=10)
     logger = MetricsLogger(tmp_path, enabled=True)

@@ -100,8 +100,8 @@ class TrainConfig:
             two seeds, mIoU +0.016 / +0.020 (val40) and +0.012 / +0.024 (test64), PA and PSNR up, object mIoU
             −0.003 to −0.022 (benchmarks/results/termination_scratch.md), for 0.6 % more time a step
             (termination_step_cost.json). Trained the shipped model's way (34,000 steps of two processes) it was
-            mixed: val40 mIoU +0.017 and F@1cm +0.049, test64 mIoU −0.020 and object mIoU −0.040, pens −0.095 on
-            both (retrain_termination.md); so not in the preset.
+            mixed: val40 mIoU +0.017 and F@1cm +0.049, test64 mIoU −0.020 and object mIoU −0.040, pens −0.095 /
+            −0.094 (retrain_termination.md); so not in the preset.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
