@@ -21,6 +21,7 @@ ALL_ON = {
     "mask_weight": 0.1,
     "depth_weight": 1.0,
     "termination_weight": 1.0,
+    "lovasz_weight": 1.0,
     "affordance_balance": 0.5,
     "input_jitter": 1.0,
     "view_consistency_weight": 0.1,

@@ -102,6 +102,11 @@ class TrainConfig:
             (termination_step_cost.json). Trained the shipped model's way (34,000 steps of two processes) it was
             mixed: val40 mIoU +0.017 and F@1cm +0.049, test64 mIoU −0.020 and object mIoU −0.040, pens −0.095 /
             −0.094 (retrain_termination.md); so not in the preset.
+        lovasz_weight: weight of the Lovász-softmax loss (:func:`affnerf.train.loss.lovasz_softmax`, a surrogate of
+            each class's intersection over union in the step's batch) relative to the cross-entropy it joins: the
+            rendered rays' at ``affordance_weight`` times this, the 3D points' at their affordance weight times this
+            (0 = off, the paper). Beyond the paper: the CE is a mean over pixels, where small parts count little;
+            this is a mean over classes, as mIoU and MPA are.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
@@ -179,6 +184,7 @@ class TrainConfig:
     mask_weight: float = 0.0
     depth_weight: float = 0.0
     termination_weight: float = 0.0
+    lovasz_weight: float = 0.0
     view_consistency_weight: float = 0.0
     input_jitter: float = 0.0
     points_weight: float = 0.0
@@ -322,6 +328,20 @@ def check_options(config: TrainConfig) -> None:
             raise AffnerfError(f"--{name} is a number of steps (>= 0; 0 = only at the end), not {every}")
     if config.optim.warmup_steps < 0:
         raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")
+    check_loss_weights(config)
+
+
+def check_loss_weights(config: TrainConfig) -> None:
+    """Raise :class:`AffnerfError` with one line when a loss term beyond the paper has a negative weight."""
+    weights = {
+        "mask-weight": config.mask_weight,
+        "depth-weight": config.depth_weight,
+        "termination-weight": config.termination_weight,
+        "lovasz-weight": config.lovasz_weight,
+    }
+    for name, weight in weights.items():
+        if weight < 0:
+            raise AffnerfError(f"--{name} is a weight (>= 0; 0 = off), not {weight}")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:

@@ -25,7 +25,8 @@ from affnerf.train.validate import validate
 #: What one iteration reports: 0-d detached loss tensors (``loss/total``, ``loss/mse``, ``loss/affordance_ce``,
 #: ``train/affordance_accuracy``; with 3D supervision also ``loss/occupancy`` and ``loss/point_affordance``, and for
 #: a signed-distance field ``loss/point_distance``; with
-#: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; the pose-aware model's
+#: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; with the Lovász term the
+#: rays' ``loss/lovasz`` (unweighted, summed over the stages); the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``; with AFF-NeRF's
 #: pixel-labelling head ``loss/view_affordance``; each weighted) and
 #: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``).
@@ -78,6 +79,7 @@ class LogScalars:
         "loss/mask",
         "loss/depth",
         "loss/termination",
+        "loss/lovasz",
         "loss/camera",
         "loss/source_depth",
         "loss/view_consistency",

@@ -42,6 +42,7 @@ from affnerf.train.loss import (
     PointWeights,
     class_weights,
     code_consistency,
+    label_lovasz,
     nerf_loss,
     occupancy_slab,
     point_loss,
@@ -332,13 +333,18 @@ class Trainer:
         for name, term in auxiliary.items():  # the model's own (pose-aware camera, GSNeRF source depth), as weighted
             parts[name] = term.detach()
             total = total + term
+        stages = [coarse] if fine is None else [coarse, fine]
         weights = (config.mask_weight, config.depth_weight, config.termination_weight)
         if any(w > 0 for w in weights):
-            stages = [coarse] if fine is None else [coarse, fine]
             rays = ray_geometry_loss(stages, batch.labels, batch.depth, weights)
             parts["loss/mask"], parts["loss/depth"] = rays.mask.detach(), rays.depth.detach()
             parts["loss/termination"] = rays.termination.detach()
             total = total + rays.total
+        if config.lovasz_weight > 0:  # the points' term weighted as their cross-entropy is
+            on_rays, on_points = label_lovasz(stages, batch.labels, geometry, None if points is None else points.labels)
+            parts["loss/lovasz"] = on_rays.detach()
+            point_weight = mu * config.point_affordance_weight
+            total = total + config.lovasz_weight * (config.affordance_weight * on_rays + point_weight * on_points)
         if points is None or geometry is None:
             return total, parts
         weights = PointWeights(
