@@ -106,7 +106,10 @@ class TrainConfig:
             each class's intersection over union in the step's batch) relative to the cross-entropy it joins: the
             rendered rays' at ``affordance_weight`` times this, the 3D points' at their affordance weight times this
             (0 = off, the paper). Beyond the paper: the CE is a mean over pixels, where small parts count little;
-            this is a mean over classes, as mIoU and MPA are.
+            this is a mean over classes, as mIoU and MPA are. At 1.0 as a further stage of the shipped weights, MPA
+            +0.011 / +0.012 and object mIoU +0.010 / +0.014 (val40 / test64) at level mIoU
+            (benchmarks/results/lovasz_stage.md); from scratch on two seeds MPA +0.002 to +0.013, mIoU −0.014 to
+            +0.001, F@1cm down to −0.021 (lovasz_scratch.md); so not in the preset.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
