@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# Two `small` runs from scratch, side by side, one core each, on the 13,000-step schedule whose seed-0 and seed-1
-# preset runs are part_edges.json's `preset_s0` / `preset_s1` (deterministic across the development VMs, so the
-# preset need not be trained again), each with its own training options; then both calibrated (32 validation
-# objects) and scored on val40 and, unless TEST64=0, on the 64 test objects, side by side. Results are gathered by
-# collect_stages.py with those preset runs as references (see results/termination_scratch.md).
-#   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] \
+# Two `small` runs side by side, one core each, each with its own training options, then both calibrated (32
+# validation objects) and scored on val40 and, unless TEST64=0, on the 64 test objects, side by side.
+# - From scratch (no INIT) on the 13,000-step schedule whose seed-0 and seed-1 preset runs are part_edges.json's
+#   `preset_s0` / `preset_s1` (deterministic across the development VMs, so the preset need not be trained again).
+#   Results are gathered by collect_stages.py with those preset runs as references (see results/termination_scratch.md).
+# - With INIT=WEIGHTS (a checkpoint, e.g. src/affnerf/weights/affnerf-small.pt): two further stages of those weights
+#   (a fresh Adam, 2e-4 -> 2e-5 over STEPS), gathered in W/stage_pair.json beside the shipped weights' rows
+#   (see results/lovasz_stage.md).
+#   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] [INIT=...] \
 #       A="NAME --seed 0 --some-option V" B="NAME --seed 1 --some-option V" benchmarks/scratch_pair.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +21,17 @@ read -r -a second <<< "${B:?B=\"NAME [TRAIN OPTIONS...]\"}"
 export OMP_NUM_THREADS=1
 # shellcheck source=benchmarks/side_by_side.sh
 source benchmarks/side_by_side.sh
+if [ -n "${INIT:-}" ]; then
+    warm_cache "$CACHE"
+    for run in "${A}" "${B}"; do
+        read -r -a options <<< "$run"
+        scored_further_stage "${options[0]}" "$INIT" "$STEPS" "$CACHE" --time-limit "$LIMIT" "${options[@]:1}" &
+    done
+    wait
+    .venv/bin/python benchmarks/collect_stages.py --work "$W" --names "${first[0]}" "${second[0]}" --compact \
+        --reference benchmarks/results/retrain_keypoints.json:run:shipped --out "$W/stage_pair.json"
+    exit 0
+fi
 scored_pair "${first[0]}" "$STEPS" "${first[@]:1}" -- "${second[0]}" "$STEPS" "${second[@]:1}"
 if [ "${TEST64:-1}" = 1 ]; then
     test64 "${first[0]}" "$W/${first[0]}" &

@@ -321,30 +321,32 @@ def check_options(config: TrainConfig) -> None:
         )
     if not 0 <= config.cut_input_weight <= 1:
         raise AffnerfError(f"--cut-input-weight is in [0, 1] (1 = every frame alike), not {config.cut_input_weight}")
-    intervals = {
-        "checkpoint-every": config.checkpoint_every,
-        "log-every": config.log_every,
-        "val-every": config.val_every,
-    }
-    for name, every in intervals.items():
-        if every < 0:
-            raise AffnerfError(f"--{name} is a number of steps (>= 0; 0 = only at the end), not {every}")
-    if config.optim.warmup_steps < 0:
-        raise AffnerfError(f"--optim.warmup-steps is a number of steps (>= 0), not {config.optim.warmup_steps}")
-    check_loss_weights(config)
-
-
-def check_loss_weights(config: TrainConfig) -> None:
-    """Raise :class:`AffnerfError` with one line when a loss term beyond the paper has a negative weight."""
+    refuse_negative(
+        {"checkpoint-every": config.checkpoint_every, "log-every": config.log_every, "val-every": config.val_every},
+        "a number of steps (>= 0; 0 = only at the end)",
+    )
+    refuse_negative({"optim.warmup-steps": config.optim.warmup_steps}, "a number of steps (>= 0)")
     weights = {
         "mask-weight": config.mask_weight,
         "depth-weight": config.depth_weight,
         "termination-weight": config.termination_weight,
         "lovasz-weight": config.lovasz_weight,
     }
-    for name, weight in weights.items():
-        if weight < 0:
-            raise AffnerfError(f"--{name} is a weight (>= 0; 0 = off), not {weight}")
+    refuse_negative(weights, "a weight (>= 0; 0 = off)")
+
+
+def refuse_negative(options: dict[str, float], meaning: str) -> None:
+    """Raise :class:`AffnerfError` with one line, ``--NAME is MEANING, not VALUE``, for the first of ``options``
+    (command-line names without the dashes, and their values) that is below 0.
+
+    Example:
+        >>> refuse_negative({"log-every": -5}, "a number of steps")
+        Traceback (most recent call last):
+        affnerf.errors.AffnerfError: --log-every is a number of steps, not -5
+    """
+    for name, value in options.items():
+        if value < 0:
+            raise AffnerfError(f"--{name} is {meaning}, not {value}")
 
 
 def preset(name: str, data: Path, out: Path) -> TrainConfig:
