@@ -8,9 +8,10 @@
 #   DATA=... [WORK=...] [CACHE=...] [SEED=0] benchmarks/outline_share.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SEED="${SEED:-0}"
-tag=""
-[ "$SEED" = 0 ] || tag="_s$SEED"  # side_by_side.sh's seed_tag
+export SEED="${SEED:-0}"
+# shellcheck source=benchmarks/side_by_side.sh
+source benchmarks/side_by_side.sh
+tag=$(seed_tag)
 A="share0.25$tag --seed $SEED --outline-fraction 0.25 --outline-radius 3" \
     B="radius6$tag --seed $SEED --outline-fraction 0.4 --outline-radius 6" \
     STEPS="${STEPS:-15000}" LIMIT="${LIMIT:-75}" WORK="${WORK:-benchmarks/.work/outline_share}" \

@@ -23,10 +23,8 @@ export OMP_NUM_THREADS=1
 source benchmarks/side_by_side.sh
 if [ -n "${INIT:-}" ]; then
     warm_cache "$CACHE"
-    for run in "${A}" "${B}"; do
-        read -r -a options <<< "$run"
-        scored_further_stage "${options[0]}" "$INIT" "$STEPS" "$CACHE" --time-limit "$LIMIT" "${options[@]:1}" &
-    done
+    scored_further_stage "${first[0]}" "$INIT" "$STEPS" "$CACHE" --time-limit "$LIMIT" "${first[@]:1}" &
+    scored_further_stage "${second[0]}" "$INIT" "$STEPS" "$CACHE" --time-limit "$LIMIT" "${second[@]:1}" &
     wait
     .venv/bin/python benchmarks/collect_stages.py --work "$W" --names "${first[0]}" "${second[0]}" --compact \
         --reference benchmarks/results/retrain_keypoints.json:run:shipped --out "$W/stage_pair.json"

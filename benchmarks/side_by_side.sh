@@ -46,7 +46,8 @@ calibrated_stage() {
 }
 
 # scored_further_stage NAME INIT STEPS CACHE [TRAIN OPTIONS...]: calibrated_stage, then val40 and the 64 test
-# objects of it side by side, as W/val40_NAME and W/test64_NAME (retrain_preset.sh, further_stage_candidate.sh).
+# objects of it side by side, as W/val40_NAME and W/test64_NAME (retrain_preset.sh, further_stage_candidate.sh,
+# scratch_pair.sh with INIT).
 scored_further_stage() {
     local name=$1
     calibrated_stage "$@"

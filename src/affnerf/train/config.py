@@ -7,6 +7,7 @@ alone: ``affnerf train --data DIR --out RUN2 --config-file RUN/config.json``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -335,7 +336,7 @@ def check_options(config: TrainConfig) -> None:
     refuse_negative(weights, "a weight (>= 0; 0 = off)")
 
 
-def refuse_negative(options: dict[str, float], meaning: str) -> None:
+def refuse_negative(options: Mapping[str, float], meaning: str) -> None:
     """Raise :class:`AffnerfError` with one line, ``--NAME is MEANING, not VALUE``, for the first of ``options``
     (command-line names without the dashes, and their values) that is below 0.
 
