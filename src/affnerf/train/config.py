@@ -110,7 +110,10 @@ class TrainConfig:
             this is a mean over classes, as mIoU and MPA are. At 1.0 as a further stage of the shipped weights, MPA
             +0.011 / +0.012 and object mIoU +0.010 / +0.014 (val40 / test64) at level mIoU
             (benchmarks/results/lovasz_stage.md); from scratch on two seeds MPA +0.002 to +0.013, mIoU −0.014 to
-            +0.001, F@1cm down to −0.021 (lovasz_scratch.md); so not in the preset.
+            +0.001, F@1cm down to −0.021 (lovasz_scratch.md). With ``termination_weight`` 1.0 it was ahead of the
+            preset at 13,000 steps on two seeds (termination_lovasz.md) but behind the shipped weights at their
+            34,000 steps of two processes (mIoU −0.004 val40, −0.018 test64, pens' caps lost;
+            retrain_termination_lovasz.md); so not in the preset.
         view_consistency_weight: weight of the agreement between the codes of two views of each training object
             (0 = off, the paper): each object also encodes a second random view, and the squared distance between
             its codes and the first view's, over the spread of the step's codes (:func:`affnerf.train.loss.
