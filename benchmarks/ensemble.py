@@ -1,7 +1,8 @@
 """Two trained models predicting together (issue 12; benchmarks/results/ensemble.md): a deep ensemble
-(Lakshminarayanan et al. 2017) of the shipped weights and the weights shipped before them, scored on val40.
+(Lakshminarayanan et al. 2017) of the shipped weights and other weights (the weights shipped before them; the
+termination + Lovász candidate), scored on val40 or, with ``--protocol test64``, on the 64 test objects.
 
-    .venv/bin/python benchmarks/ensemble.py --data DATA --out OUT.json CHECKPOINT CHECKPOINT [...]
+    .venv/bin/python benchmarks/ensemble.py [--protocol test64] --data DATA --out OUT.json CHECKPOINT CHECKPOINT [...]
 
 Each member encodes the input view itself. At every sample point the members' colours are averaged and their
 affordance distributions are averaged (the ensemble's logits are the log of the mean probabilities, so the
@@ -112,8 +113,13 @@ class EnsembleNeRF(ConditionedNeRF):
         return cond
 
 
-def val40(data: Path, out: Path, loaded: list[LoadedModel], combine: str) -> dict:
-    """The ensemble's val40 metrics (``side_by_side.sh``'s protocol), written under ``out``."""
+#: side_by_side.sh's protocols: (split, objects per category).
+PROTOCOLS = {"val40": ("val", 5), "test64": ("test", 8)}
+
+
+def score(data: Path, out: Path, loaded: list[LoadedModel], combine: str, protocol: str = "val40") -> dict:
+    """The ensemble's metrics on ``protocol`` (val40 or test64, ``side_by_side.sh``'s), written under ``out``."""
+    split, objects = PROTOCOLS[protocol]
 
     def build(context):
         first = loaded[0]
@@ -129,8 +135,8 @@ def val40(data: Path, out: Path, loaded: list[LoadedModel], combine: str) -> dic
 
     register_method(MethodSpec(f"ensemble-{combine}", build, "an ensemble of trained models"))
     config = EvalConfig(
-        run=loaded[0].path, data=data, out=out, split="val", method=f"ensemble-{combine}", scale=0.25,
-        target_views=5, max_objects=5, mesh_resolution=96, device="cpu",
+        run=loaded[0].path, data=data, out=out, split=split, method=f"ensemble-{combine}", scale=0.25,
+        target_views=5, max_objects=objects, mesh_resolution=96, device="cpu",
     )  # fmt: skip
     return run_eval(config)[f"ensemble-{combine}"]
 
@@ -140,13 +146,14 @@ def main() -> None:
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--work", type=Path, default=Path("/tmp/affnerf-ensemble"))
+    parser.add_argument("--protocol", choices=sorted(PROTOCOLS), default="val40")
     parser.add_argument("models", type=Path, nargs="+")
     args = parser.parse_args()
     loaded = [load_model(m, "cpu") for m in args.models]
-    results = {"models": [str(m) for m in args.models]}
+    results = {"models": [str(m) for m in args.models], "protocol": args.protocol}
     for combine in ("density", "distance"):
         started = time.perf_counter()
-        metrics = val40(args.data, args.work / combine, loaded, combine)
+        metrics = score(args.data, args.work / combine, loaded, combine, args.protocol)
         results[combine] = {"mean": metrics["mean"], "categories": metrics["categories"]}
         results[combine]["seconds"] = round(time.perf_counter() - started, 1)
         print(combine, {k: round(v, 4) for k, v in metrics["mean"].items() if isinstance(v, float)})
