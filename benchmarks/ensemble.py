@@ -145,15 +145,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, required=True)
     parser.add_argument("--out", type=Path, required=True)
-    parser.add_argument("--work", type=Path, default=Path("/tmp/affnerf-ensemble"))
+    parser.add_argument(
+        "--work", type=Path, default=None, help="scratch folder (default: /tmp/affnerf-ensemble/PROTOCOL)"
+    )
     parser.add_argument("--protocol", choices=sorted(PROTOCOLS), default="val40")
     parser.add_argument("models", type=Path, nargs="+")
     args = parser.parse_args()
+    work = args.work or Path("/tmp/affnerf-ensemble") / args.protocol
     loaded = [load_model(m, "cpu") for m in args.models]
     results = {"models": [str(m) for m in args.models], "protocol": args.protocol}
     for combine in ("density", "distance"):
         started = time.perf_counter()
-        metrics = score(args.data, args.work / combine, loaded, combine, args.protocol)
+        metrics = score(args.data, work / combine, loaded, combine, args.protocol)
         results[combine] = {"mean": metrics["mean"], "categories": metrics["categories"]}
         results[combine]["seconds"] = round(time.perf_counter() - started, 1)
         print(combine, {k: round(v, 4) for k, v in metrics["mean"].items() if isinstance(v, float)})
