@@ -132,6 +132,14 @@ test64() {
         --max-objects 8 --mesh-resolution 96 --device cpu --out "$W/test64_$1"
 }
 
+# val64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 validation objects of DATA (8 per category), to
+# W/val64_NAME: the larger set to choose a recipe on, the test objects kept for reporting
+# (results/validation_size.md).
+val64() {
+    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
+        --max-objects 8 --mesh-resolution 96 --device cpu --out "$W/val64_$1"
+}
+
 # scored_stage NAME CORE CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the shipped weights with the plain
 # stage's schedule (fine_tune_jitter.sh: a fresh Adam, 2e-4 -> 2e-5 over 15,500 steps, stopped at 14,393) and the
 # given options, single-threaded on core CORE (this subshell and all it starts) with its frame and point cache in
