@@ -92,11 +92,18 @@ sweep_small_runs() {
     wait
 }
 
-# val40 NAME RUN-OR-CHECKPOINT: AFF-NeRF on 40 validation objects of DATA (5 per category, input view 0, 5 target
-# views at 100x75, or VAL40_SCALE of the dataset's resolution; meshes at 96^3), written to W/val40_NAME.
+# protocol_eval SPLIT OBJECTS SCALE OUT RUN-OR-CHECKPOINT: AFF-NeRF on the first OBJECTS objects per category of
+# DATA's SPLIT (input view 0, 5 target views at SCALE of the dataset's resolution, meshes at 96^3), written to OUT:
+# the one protocol behind val40, test64, val64 and fresh_objects.sh.
+protocol_eval() {
+    .venv/bin/affnerf eval --run "$5" --data "$DATA" --split "$1" --method affnerf --scale "$3" --target-views 5 \
+        --max-objects "$2" --mesh-resolution 96 --device cpu --out "$4"
+}
+
+# val40 NAME RUN-OR-CHECKPOINT: AFF-NeRF on 40 validation objects of DATA (5 per category, 100x75 or VAL40_SCALE of
+# the dataset's resolution), written to W/val40_NAME.
 val40() {
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale "${VAL40_SCALE:-0.25}" \
-        --target-views 5 --max-objects 5 --mesh-resolution 96 --device cpu --out "$W/val40_$1"
+    protocol_eval val 5 "${VAL40_SCALE:-0.25}" "$W/val40_$1" "$2"
 }
 
 # scored_pair NAME_A STEPS_A [OPTIONS_A...] -- NAME_B STEPS_B [OPTIONS_B...]: the frame and point cache CACHE
@@ -128,16 +135,14 @@ calibrated_val40() {
 # test64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 test objects of DATA (8 per category), to W/test64_NAME:
 # a second, larger set of objects on which to check a difference val40 found.
 test64() {
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split test --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 8 --mesh-resolution 96 --device cpu --out "$W/test64_$1"
+    protocol_eval test 8 0.25 "$W/test64_$1" "$2"
 }
 
 # val64 NAME RUN-OR-CHECKPOINT: val40's protocol on all 64 validation objects of DATA (8 per category), to
 # W/val64_NAME: the larger set to choose a recipe on, the test objects kept for reporting
 # (results/validation_size.md).
 val64() {
-    .venv/bin/affnerf eval --run "$2" --data "$DATA" --split val --method affnerf --scale 0.25 --target-views 5 \
-        --max-objects 8 --mesh-resolution 96 --device cpu --out "$W/val64_$1"
+    protocol_eval val 8 0.25 "$W/val64_$1" "$2"
 }
 
 # scored_stage NAME CORE CACHE [TRAIN OPTIONS...]: a further stage W/NAME from the shipped weights with the plain
