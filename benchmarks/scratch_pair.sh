@@ -7,7 +7,9 @@
 # - With INIT=WEIGHTS (a checkpoint, e.g. src/affnerf/weights/affnerf-small.pt): two further stages of those weights
 #   (a fresh Adam, 2e-4 -> 2e-5 over STEPS), gathered in W/stage_pair.json beside the shipped weights' rows
 #   (see results/lovasz_stage.md).
-#   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] [INIT=...] \
+# - WARM_OPTIONS="--some-option V": build the point sets with these options before the pair (an option that
+#   changes the point sets, such as --point-sigma-near, must be the same in A and B: the cache keeps one set an object).
+#   DATA=... [WORK=...] [CACHE=...] [STEPS=13000] [TEST64=1] [INIT=...] [WARM_OPTIONS=...] \
 #       A="NAME --seed 0 --some-option V" B="NAME --seed 1 --some-option V" benchmarks/scratch_pair.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."

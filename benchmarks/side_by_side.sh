@@ -107,16 +107,18 @@ val40() {
 }
 
 # scored_pair NAME_A STEPS_A [OPTIONS_A...] -- NAME_B STEPS_B [OPTIONS_B...]: the frame and point cache CACHE
-# built, then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on CACHE), then each calibrated and
+# built (with the options in WARM_OPTIONS, for runs whose point sets differ from the preset's: both runs must then
+# share them), then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on CACHE), then each calibrated and
 # scored by val40, side by side (experts.sh, foreground_fraction.sh, outline_rays.sh).
 scored_pair() {
-    local first=()
+    local first=() warm_options=()
     while [ "$1" != "--" ]; do
         first+=("$1")
         shift
     done
     shift
-    warm_cache "$CACHE"
+    read -r -a warm_options <<< "${WARM_OPTIONS:-}"
+    warm_cache "$CACHE" "${warm_options[@]}"
     timed_small_run "${first[0]}" "${first[1]}" --cache-dir "$CACHE" "${first[@]:2}" &
     timed_small_run "$1" "$2" --cache-dir "$CACHE" "${@:3}" &
     wait

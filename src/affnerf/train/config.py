@@ -137,7 +137,10 @@ class TrainConfig:
             L1 between the field's distance and the true one, both clamped to the truncation
             (:data:`affnerf.train.points.DISTANCE_TRUNCATION`) and divided by it, relative to their occupancy BCE;
             ignored by density fields.
-        point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set.
+        point_sigma_near: noise sigma (m) of the first half of the near-surface points of each point set. From
+            scratch on two seeds against the presets' 5 mm (results/point_sigma.md): 2.5 mm behind on val40 (mIoU
+            -0.013 both), 10 mm level on mIoU and behind inside the object (object mIoU -0.013 to -0.021, MPA
+            -0.009 to -0.014 in all four pairs).
         point_sigma_far: noise sigma (m) of the second half (a quarter of each set is uniform over the cube).
         point_part_balance: how the near-surface points are spread over the object's affordance parts: 0 by area
             (Occupancy Networks' sampling), 1 the same share for every part however small its surface (a bail, a
