@@ -10,13 +10,15 @@ seed_tag() {
 }
 
 # warm_cache CACHE [TRAIN OPTIONS...]: build the frame and point cache of DATA in CACHE (a one-step run in W/warm,
-# with the options that change the crops) before any run is timed, so no run pays for decoding.
+# with the options that change the crops or the point sets) before any run is timed, so no run pays for decoding.
+# The run has WARM_NPROC single-threaded processes under torchrun (default 2, one a core), which share the objects.
 warm_cache() {
     local cache=$1
     shift
     rm -rf "$W/warm"
-    .venv/bin/python -m affnerf.cli.main train --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu \
-        --val-every 0 --cache-dir "$cache" --no-progress "$@"
+    OMP_NUM_THREADS=1 .venv/bin/torchrun --standalone --nproc_per_node "${WARM_NPROC:-2}" -m affnerf.cli.main train \
+        --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu --val-every 0 --cache-dir "$cache" \
+        --no-progress "$@"
 }
 
 # timed_small_run NAME STEPS [TRAIN OPTIONS...]: train W/NAME for STEPS steps (its schedule's length) or LIMIT
