@@ -12,9 +12,12 @@ seed_tag() {
 # warm_cache CACHE [TRAIN OPTIONS...]: build the frame and point cache of DATA in CACHE (a one-step run in W/warm,
 # with the options that change the crops or the point sets) before any run is timed, so no run pays for decoding.
 # The run has WARM_NPROC single-threaded processes under torchrun (default 2, one a core), which share the objects.
+# WARM_OPTIONS="--some-option V" adds options for every warm-up of a script (point sets that differ from the preset's).
 warm_cache() {
-    local cache=$1
+    local cache=$1 warm_options=()
     shift
+    read -r -a warm_options <<< "${WARM_OPTIONS:-}"
+    set -- "$@" "${warm_options[@]}"
     rm -rf "$W/warm"
     OMP_NUM_THREADS=1 .venv/bin/torchrun --standalone --nproc_per_node "${WARM_NPROC:-2}" -m affnerf.cli.main train \
         --data "$DATA" --out "$W/warm" --config small --steps 1 --device cpu --val-every 0 --cache-dir "$cache" \
@@ -109,18 +112,17 @@ val40() {
 }
 
 # scored_pair NAME_A STEPS_A [OPTIONS_A...] -- NAME_B STEPS_B [OPTIONS_B...]: the frame and point cache CACHE
-# built (with the options in WARM_OPTIONS, for runs whose point sets differ from the preset's: both runs must then
-# share them), then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on CACHE), then each calibrated and
+# built (warm_cache, with WARM_OPTIONS), then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on
+# CACHE), then each calibrated and
 # scored by val40, side by side (experts.sh, foreground_fraction.sh, outline_rays.sh).
 scored_pair() {
-    local first=() warm_options=()
+    local first=()
     while [ "$1" != "--" ]; do
         first+=("$1")
         shift
     done
     shift
-    read -r -a warm_options <<< "${WARM_OPTIONS:-}"
-    warm_cache "$CACHE" "${warm_options[@]}"
+    warm_cache "$CACHE"
     timed_small_run "${first[0]}" "${first[1]}" --cache-dir "$CACHE" "${first[@]:2}" &
     timed_small_run "$1" "$2" --cache-dir "$CACHE" "${@:3}" &
     wait
