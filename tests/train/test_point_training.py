@@ -115,6 +115,12 @@ def test_a_part_balance_outside_zero_to_one_is_refused_only_with_points():
     check_options(replace(SMALL, points_weight=0.0, point_part_balance=1.5))  # no points: nothing to balance
 
 
+def test_a_uniform_share_outside_zero_to_one_is_refused():
+    with pytest.raises(AffnerfError, match="point-uniform-share in"):
+        check_options(replace(SMALL, point_uniform_share=-0.1))
+    check_options(replace(SMALL, point_uniform_share=0.0))
+
+
 def test_a_points_weight_schedule_is_logged_and_goes_from_start_to_final(tiny_train_config):
     config = tiny_train_config(steps=10, checkpoint_every=10, points_weight=1.0, points_weight_final=0.0)
     train(config)

@@ -119,6 +119,13 @@ def test_point_cache_is_reused_and_rebuilt_when_its_source_or_settings_change(tm
     assert len(made) == 5 and sorted(p.name for p in (tmp_path / "cache").iterdir()) == ["box.points"]
     cached_points(mesh, "box", tmp_path / "cache", 0.25, (0.005, 0.03), total=4096, part_balance=1.0)
     assert len(made) == 6  # another part balance is another point set
+    half = cached_points(mesh, "box", tmp_path / "cache", 0.25, (0.005, 0.03), total=4096, uniform_share=0.5)
+    assert len(made) == 7  # and so is another uniform share
+
+    def far(points):  # share beyond 0.2 m on some axis: the box's half side is 0.1, so only uniform draws
+        return float((np.abs(points).max(axis=1) > 0.2).mean())
+
+    assert far(half.points) > 1.5 * far(relabelled.points)  # 0.5 uniform against the default quarter
 
 
 def test_a_missing_mesh_or_one_without_affordance_is_a_clear_error(tmp_path):

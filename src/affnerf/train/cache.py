@@ -30,7 +30,7 @@ from affnerf.data.crop import crop_intrinsics, crop_object, crop_window
 from affnerf.data.dataset import ObjectData
 from affnerf.errors import input_error
 from affnerf.meshio import read_labelled_ply
-from affnerf.train.points import POINT_SET_SIZE, PointSet, make_point_set
+from affnerf.train.points import POINT_SET_SIZE, UNIFORM_SHARE, PointSet, make_point_set
 
 
 @dataclass
@@ -233,25 +233,39 @@ POINTS_VERSION = 4
 
 
 def _points_signature(
-    mesh_path: Path, half_extent: float, sigmas: tuple[float, ...], total: int, part_balance: float = 0.0
+    mesh_path: Path,
+    half_extent: float,
+    sigmas: tuple[float, ...],
+    total: int,
+    part_balance: float = 0.0,
+    uniform_share: float = UNIFORM_SHARE,
 ) -> str:
     digest = hashlib.sha1(Path(mesh_path).read_bytes()).hexdigest()[:16]
-    balance = f"-b{part_balance:g}" if part_balance > 0 else ""  # area-weighted sets keep their older signature
-    return f"p{POINTS_VERSION}-{digest}-{half_extent:g}-{','.join(f'{s:g}' for s in sigmas)}-{total}{balance}"
+    # sets drawn as before keep their older signature
+    balance = f"-b{part_balance:g}" if part_balance > 0 else ""
+    uniform = f"-u{uniform_share:g}" if uniform_share != UNIFORM_SHARE else ""
+    return f"p{POINTS_VERSION}-{digest}-{half_extent:g}-{','.join(f'{s:g}' for s in sigmas)}-{total}{balance}{uniform}"
 
 
 def _write_points(
-    tmp: Path, mesh_path: Path, seed: int, half_extent: float, sigmas: tuple, total: int, part_balance: float
+    tmp: Path,
+    mesh_path: Path,
+    seed: int,
+    half_extent: float,
+    sigmas: tuple,
+    total: int,
+    part_balance: float,
+    uniform_share: float,
 ) -> None:
     mesh = read_labelled_ply(mesh_path)
     if "affordance" not in mesh.face_props:
         raise input_error(mesh_path, "mesh has no per-face 'affordance' property (needed by --points-weight)")
-    points = make_point_set(mesh, half_extent, sigmas, seed, total, part_balance)
+    points = make_point_set(mesh, half_extent, sigmas, seed, total, part_balance, uniform_share)
     np.save(tmp / "points.npy", points.points)
     np.save(tmp / "occupancy.npy", points.occupancy)
     np.save(tmp / "point_labels.npy", points.labels)
     np.save(tmp / "point_distance.npy", points.distance)
-    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance)
+    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance, uniform_share)
     (tmp / "meta.json").write_text(json.dumps({"signature": signature, "seed": seed}))
 
 
@@ -269,6 +283,7 @@ def cached_points(
     sigmas: tuple[float, ...],
     total: int = POINT_SET_SIZE,
     part_balance: float = 0.0,
+    uniform_share: float = UNIFORM_SHARE,
 ) -> PointSet:
     """The object's supervision points (``<cache_dir>/<object_id>.points``), made from ``mesh_path`` first if
     they are missing or stale (another mesh, cube, sigmas or part balance); the draws are seeded by the object id
@@ -277,14 +292,16 @@ def cached_points(
     Args:
         mesh_path: the object's ``mesh.ply``; object_id: its dataset id; cache_dir: the frame cache's folder;
         half_extent: half the scene cube's side (m); sigmas: near-surface noise sigmas (m); total: N;
-        part_balance: the near-surface samples' part weighting (:func:`affnerf.train.points.part_face_weights`).
+        part_balance: the near-surface samples' part weighting (:func:`affnerf.train.points.part_face_weights`);
+        uniform_share: the share of the N points drawn uniformly over the cube.
     """
     if not Path(mesh_path).is_file():
         raise input_error(mesh_path, "file not found (--points-weight needs each training object's mesh.ply)")
     folder = Path(cache_dir) / f"{object_id}.points"
     meta = folder / "meta.json"
-    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance)
+    signature = _points_signature(mesh_path, half_extent, sigmas, total, part_balance, uniform_share)
     if not (meta.is_file() and json.loads(meta.read_text()).get("signature") == signature):
         seed = zlib.crc32(object_id.encode())
-        write_folder(folder, lambda tmp: _write_points(tmp, mesh_path, seed, half_extent, sigmas, total, part_balance))
+        draw = (half_extent, sigmas, total, part_balance, uniform_share)
+        write_folder(folder, lambda tmp: _write_points(tmp, mesh_path, seed, *draw))
     return load_points(folder)

@@ -148,6 +148,8 @@ class TrainConfig:
             handle), in between each face's area times its part's area to the power -b
             (:func:`affnerf.train.points.part_face_weights`). Beyond the paper; off in both presets: as a further
             stage it moved neither the 2D nor the 3D scores nor the part grasps (results/part_balance.md).
+        point_uniform_share: the share of each point set drawn uniformly over the scene cube (Occupancy Networks
+            and IF-Net draw such a share beside the near-surface points); the rest is split between the two sigmas.
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints (0 = only at the end of the run and when out of time).
@@ -209,6 +211,7 @@ class TrainConfig:
     point_sigma_near: float = 0.005
     point_sigma_far: float = 0.02
     point_part_balance: float = 0.0
+    point_uniform_share: float = 0.25
     image_scale: float = 1.0
     categories: str = ""
     checkpoint_every: int = 2000
@@ -308,10 +311,14 @@ def check_options(config: TrainConfig) -> None:
             raise AffnerfError("--view-consistency-weight needs at least 2 objects a step (--objects-per-step)")
     sigmas = (config.point_sigma_near, config.point_sigma_far)
     if config.points_weight > 0 and (
-        config.points_per_object < 1 or min(sigmas) < 0 or not 0 <= config.point_part_balance <= 1
+        config.points_per_object < 1
+        or min(sigmas) < 0
+        or not 0 <= config.point_part_balance <= 1
+        or not 0 <= config.point_uniform_share <= 1
     ):
         raise AffnerfError(
-            "--points-weight needs --points-per-object >= 1, point sigmas >= 0 and --point-part-balance in [0, 1]"
+            "--points-weight needs --points-per-object >= 1, point sigmas >= 0, --point-part-balance in [0, 1]"
+            " and --point-uniform-share in [0, 1]"
         )
     if config.points_weight_final >= 0 and config.points_weight <= 0:
         raise AffnerfError("--points-weight-final needs --points-weight > 0 (the weight the schedule starts from)")

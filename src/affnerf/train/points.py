@@ -109,10 +109,12 @@ def sample_positions(
     total: int,
     rng: np.random.Generator,
     face_weight: np.ndarray | None = None,
+    uniform_share: float = UNIFORM_SHARE,
 ) -> np.ndarray:
     """(total, 3) positions: uniform over the cube [-half_extent, half_extent]^3, then surface samples (area-weighted,
-    or by the (F,) ``face_weight``) plus isotropic Gaussian noise of each sigma (metres), clipped to the cube."""
-    counts = split_counts(total, len(sigmas))
+    or by the (F,) ``face_weight``) plus isotropic Gaussian noise of each sigma (metres), clipped to the cube;
+    ``uniform_share`` of them uniform (:func:`split_counts`)."""
+    counts = split_counts(total, len(sigmas), uniform_share)
     parts = [rng.uniform(-half_extent, half_extent, (counts[0], 3))]
     for sigma, count in zip(sigmas, counts[1:], strict=True):
         surface, _ = trimesh.sample.sample_surface(mesh, count, face_weight=face_weight, seed=int(rng.integers(2**31)))
@@ -177,6 +179,7 @@ def make_point_set(
     seed: int,
     total: int = POINT_SET_SIZE,
     part_balance: float = 0.0,
+    uniform_share: float = UNIFORM_SHARE,
 ) -> PointSet:
     """The supervision points of a labelled mesh (face property ``affordance``), see the module docstring.
 
@@ -187,6 +190,7 @@ def make_point_set(
         seed: seed of the draws (the same seed and mesh give the same points).
         total: N, points in the set.
         part_balance: b of the near-surface samples' part weighting (:func:`part_face_weights`; 0 = by area).
+        uniform_share: the share of the points drawn uniformly over the cube (:func:`split_counts`).
     """
     if "affordance" not in mesh.face_props:
         raise ValueError("mesh has no per-face 'affordance' property")
@@ -194,7 +198,7 @@ def make_point_set(
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     face_labels = np.asarray(mesh.face_props["affordance"])
     weight = part_face_weights(tm.area_faces, face_labels, part_balance) if part_balance > 0 else None
-    points = sample_positions(tm, half_extent, sigmas, total, rng, weight)
+    points = sample_positions(tm, half_extent, sigmas, total, rng, weight, uniform_share)
     inside = inside_mesh(tm, points)
     tree, sample_faces = surface_samples(tm, int(rng.integers(2**31)))
     labels = nearest_labels(tree, sample_faces, face_labels, points, inside)

@@ -128,8 +128,15 @@ def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> d
 
     def points(entry: IndexEntry) -> PointSet:
         mesh = ds.root / entry.path / "mesh.ply"
-        half_extent, balance = config.model.scene_half_extent, config.point_part_balance
-        return cached_points(mesh, entry.id, _cache_dir(config), half_extent, sigmas, part_balance=balance)
+        return cached_points(
+            mesh,
+            entry.id,
+            _cache_dir(config),
+            config.model.scene_half_extent,
+            sigmas,
+            part_balance=config.point_part_balance,
+            uniform_share=config.point_uniform_share,
+        )
 
     show = config.progress and ctx.is_main
     for entry in tqdm(entries[ctx.rank :: ctx.world], desc="caching points", unit="obj", disable=not show):
