@@ -141,8 +141,8 @@ class TrainConfig:
             scratch on two seeds against the presets' 5 mm (results/point_sigma.md): 2.5 mm behind on val40 (mIoU
             -0.013 both), 10 mm level on mIoU and behind inside the object (object mIoU -0.013 to -0.021, MPA
             -0.009 to -0.014 in all four pairs).
-        point_sigma_far: noise sigma (m) of the second half (a quarter of each set is uniform over the cube). 30 mm
-            against the presets' 20 on two seeds: behind inside the object in all four pairs (results/point_sigma.md).
+        point_sigma_far: noise sigma (m) of the second half. 30 mm and 10 mm against the presets' 20, two seeds
+            each: behind inside the object in all four pairs each (results/point_sigma.md).
         point_part_balance: how the near-surface points are spread over the object's affordance parts: 0 by area
             (Occupancy Networks' sampling), 1 the same share for every part however small its surface (a bail, a
             handle), in between each face's area times its part's area to the power -b
