@@ -146,6 +146,14 @@ def scores(pixels: dict[str, CategoryPixels], bias: np.ndarray) -> dict:
     return {"mean": mean, "categories": {n: {k: m[k] for k in keys} for n, m in cats.items()}}
 
 
+def open_protocol(args: argparse.Namespace) -> tuple[Dataset, ConditionedNeRFMethod, ProtocolConfig]:
+    """The dataset, the model and the one-input-view protocol of ``args.data``, ``args.checkpoint``,
+    ``args.target_views`` and ``args.scale`` (also ``label_rule.py``'s)."""
+    method = ConditionedNeRFMethod(load_model(args.checkpoint, "cpu"))
+    protocol = ProtocolConfig(input_views=1, target_views=args.target_views, scale=args.scale)
+    return Dataset.open(args.data), method, protocol
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, required=True)
@@ -158,9 +166,7 @@ def main() -> None:
     parser.add_argument("--target-views", type=int, default=5)
     parser.add_argument("--scale", type=float, default=0.5)
     args = parser.parse_args()
-    ds = Dataset.open(args.data)
-    method = ConditionedNeRFMethod(load_model(args.checkpoint, "cpu"))
-    protocol = ProtocolConfig(input_views=1, target_views=args.target_views, scale=args.scale)
+    ds, method, protocol = open_protocol(args)
     start = time.perf_counter()
     fit_pixels = render_split(method, ds, args.fit_split, args.fit_per_category, protocol)
     score_pixels = render_split(method, ds, args.score_split, args.score_per_category, protocol)

@@ -22,16 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from affnerf.data.dataset import Dataset
 from affnerf.environment import describe_machine
-from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
-from affnerf.eval.protocol import ProtocolConfig
 from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
-from affnerf.predict.loading import load_model
 from affnerf.vocab import AFFORDANCE_CLASSES
 
 sys.path.insert(0, str(Path(__file__).parent))
-from label_bias import CategoryPixels, render_split  # noqa: E402
+from label_bias import CategoryPixels, open_protocol, render_split  # noqa: E402
 
 #: Background probabilities at or above which the two-step rule calls a pixel background (0.5: opacity below 0.5).
 THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7)
@@ -87,9 +83,7 @@ def main() -> None:
     parser.add_argument("--target-views", type=int, default=5)
     parser.add_argument("--scale", type=float, default=0.5)
     args = parser.parse_args()
-    ds = Dataset.open(args.data)
-    method = ConditionedNeRFMethod(load_model(args.checkpoint, "cpu"))
-    protocol = ProtocolConfig(input_views=1, target_views=args.target_views, scale=args.scale)
+    ds, method, protocol = open_protocol(args)
     result: dict = {"checkpoint": str(args.checkpoint), "machine": describe_machine(), "splits": {}}
     result["protocol"] = {"input_views": 1, "target_views": args.target_views, "scale": args.scale}
     for spec in args.splits:
