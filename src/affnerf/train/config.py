@@ -150,6 +150,8 @@ class TrainConfig:
             stage it moved neither the 2D nor the 3D scores nor the part grasps (results/part_balance.md).
         point_uniform_share: the share of each point set drawn uniformly over the scene cube (Occupancy Networks
             and IF-Net draw such a share beside the near-surface points); the rest is split between the two sigmas.
+            0.1 against the presets' quarter, two seeds from scratch: one ahead, one behind, F@1cm behind in all four
+            pairs (results/point_sigma.md).
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints (0 = only at the end of the run and when out of time).
