@@ -115,6 +115,12 @@ def test_a_part_balance_outside_zero_to_one_is_refused_only_with_points():
     check_options(replace(SMALL, points_weight=0.0, point_part_balance=1.5))  # no points: nothing to balance
 
 
+def test_the_configs_uniform_share_is_the_point_sets_default():
+    from affnerf.train.points import UNIFORM_SHARE
+
+    assert SMALL.point_uniform_share == UNIFORM_SHARE  # the default keeps the cached point sets' signature
+
+
 def test_a_uniform_share_outside_zero_to_one_is_refused():
     with pytest.raises(AffnerfError, match="point-uniform-share in"):
         check_options(replace(SMALL, point_uniform_share=-0.1))
