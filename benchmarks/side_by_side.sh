@@ -113,8 +113,8 @@ val40() {
 
 # scored_pair NAME_A STEPS_A [OPTIONS_A...] -- NAME_B STEPS_B [OPTIONS_B...]: the frame and point cache CACHE
 # built (warm_cache, with WARM_OPTIONS), then W/NAME_A and W/NAME_B trained side by side (timed_small_run, on
-# CACHE), then each calibrated and
-# scored by val40, side by side (experts.sh, foreground_fraction.sh, outline_rays.sh).
+# CACHE), then each calibrated and scored by val40, side by side (experts.sh, foreground_fraction.sh,
+# outline_rays.sh).
 scored_pair() {
     local first=()
     while [ "$1" != "--" ]; do

@@ -15,8 +15,9 @@ from affnerf.data.dataset import Dataset
 from affnerf.errors import AffnerfError
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
-from affnerf.train.config import PAPER, SMALL, check_options
+from affnerf.train.config import PAPER, SMALL
 from affnerf.train.loss import nerf_loss
+from affnerf.train.options import check_options
 from affnerf.train.sampler import RaySampler
 from affnerf.train.state import make_optimizer
 from affnerf.train.trainer import Trainer, train

@@ -24,8 +24,6 @@ from torch.nn.parallel import DistributedDataParallel
 from tqdm import tqdm
 
 from affnerf.data.dataset import Dataset, ObjectData
-from affnerf.data.format import IndexEntry
-from affnerf.errors import AffnerfError
 from affnerf.fileio import write_json_atomic
 from affnerf.model.base import ConditionedNeRF
 from affnerf.model.field import PointGeometry
@@ -33,8 +31,8 @@ from affnerf.model.raymarch import RayOutputs
 from affnerf.model.registry import build_model
 from affnerf.train import distributed as dist_utils
 from affnerf.train.augment import jitter_crops
-from affnerf.train.cache import ObjectFrames, cached_frames, cached_points
-from affnerf.train.config import TrainConfig, check_options, for_model_kind
+from affnerf.train.cache import ObjectFrames
+from affnerf.train.config import TrainConfig, for_model_kind
 from affnerf.train.ema import WeightAverage
 from affnerf.train.hooks import AdvanceProgress, Hook, IterationOutputs, LogScalars, SaveCheckpoints, Validate
 from affnerf.train.logger import MetricsLogger
@@ -48,8 +46,10 @@ from affnerf.train.loss import (
     point_loss,
     ray_geometry_loss,
 )
-from affnerf.train.points import DISTANCE_TRUNCATION, PointSet
+from affnerf.train.options import check_options
+from affnerf.train.points import DISTANCE_TRUNCATION
 from affnerf.train.precision import forward_precision
+from affnerf.train.run_cache import load_frames, load_points
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
 from affnerf.train.schedule import learning_rate, points_weight
 from affnerf.train.state import TrainingState, make_optimizer, params_checksum, prepare_run_folder
@@ -86,22 +86,6 @@ def train(config: TrainConfig) -> TrainSummary:
         dist_utils.teardown(ctx)
 
 
-def _load_frames(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> list[ObjectFrames]:
-    """Decode (once) and memory-map the training objects' frames; ranks share the decoding work."""
-    entries = ds.objects("train", config.categories)
-    if not entries:
-        wanted = config.categories or "all"
-        raise AffnerfError(f"{ds.root / 'dataset.json'}: no training objects (split train, categories {wanted})")
-    cache = _cache_dir(config)
-    crop = config.model.encoder_resolution
-    mine = entries[ctx.rank :: ctx.world]
-    bar = tqdm(mine, desc="caching frames", unit="obj", disable=not (config.progress and ctx.is_main))
-    for entry in bar:
-        cached_frames(ds.load_object(entry), cache, config.image_scale, crop)
-    dist_utils.barrier(ctx)
-    return [cached_frames(ds.load_object(e), cache, config.image_scale, crop) for e in entries]
-
-
 def label_counts(frames: list[ObjectFrames], num_classes: int) -> torch.Tensor:
     """(C,) pixels of each affordance class over every training frame (background included)."""
     counts = torch.zeros(num_classes, dtype=torch.float64)
@@ -115,34 +99,6 @@ def object_backgrounds(batch: RayBatch) -> torch.Tensor:
     bg = torch.ones(batch.images.shape[0], 3, dtype=batch.background.dtype, device=batch.background.device)
     bg[batch.ray_object] = batch.background
     return bg
-
-
-def _cache_dir(config: TrainConfig) -> Path:
-    return Path(config.cache_dir) if config.cache_dir else Path(config.out) / "cache"
-
-
-def _load_points(config: TrainConfig, ds: Dataset, ctx: dist_utils.Context) -> dict[str, PointSet]:
-    """Make (once) and memory-map the training objects' 3D supervision points; ranks share the work."""
-    entries = ds.objects("train", config.categories)
-    sigmas = (config.point_sigma_near, config.point_sigma_far)  # checked by check_options
-
-    def points(entry: IndexEntry) -> PointSet:
-        mesh = ds.root / entry.path / "mesh.ply"
-        return cached_points(
-            mesh,
-            entry.id,
-            _cache_dir(config),
-            config.model.scene_half_extent,
-            sigmas,
-            part_balance=config.point_part_balance,
-            uniform_share=config.point_uniform_share,
-        )
-
-    show = config.progress and ctx.is_main
-    for entry in tqdm(entries[ctx.rank :: ctx.world], desc="caching points", unit="obj", disable=not show):
-        points(entry)
-    dist_utils.barrier(ctx)
-    return {e.id: points(e) for e in entries}
 
 
 class TrainingPass(torch.nn.Module):
@@ -224,13 +180,13 @@ class Trainer:
         self.dataset = Dataset.open(config.data)
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
-        frames = _load_frames(config, self.dataset, ctx)
+        frames = load_frames(config, self.dataset, ctx)
         self.state = self._build_state(frames)
         if config.affordance_balance > 0:
             counts = label_counts(frames, len(self.dataset.affordance_classes))
             self.class_weight = class_weights(counts, config.affordance_balance).to(ctx.device)
         if config.points_weight > 0:
-            points = _load_points(config, self.dataset, ctx)
+            points = load_points(config, self.dataset, ctx)
             self.state.points = PointSampler(points, config.points_per_object, config.seed, ctx.rank)
         if resume_from is not None:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
