@@ -15,6 +15,7 @@ from affnerf.model.encoding import encoding_dim, positional_encoding
 from affnerf.model.field import ConditionalField, ObjectCodes
 from affnerf.model.registry import build_model
 from affnerf.model.resnet import CodeEncoder, ResNet18, spatial_soft_argmax
+from affnerf.rendering.samplers import SurfaceGuide
 
 SMALL = ModelConfig(
     encoder_width=0.125,
@@ -301,3 +302,21 @@ def test_code_noise_is_refused_for_other_models_and_below_zero():
         build_model(replace(SMALL, kind="pixelnerf", code_noise=0.1), 3)
     with pytest.raises(AffnerfError, match="--model.code-noise"):
         build_model(replace(SMALL, code_noise=-0.1), 3)
+
+
+def test_a_surface_guide_puts_fine_samples_at_each_surface_rays_depth_and_leaves_the_coarse_ones():
+    torch.manual_seed(0)
+    model = AffNeRF(replace(SMALL, coarse_field="shared"), num_classes=4)
+    codes = model.encode(torch.rand(1, 3, 32, 32))
+    origins = torch.tensor([[0.0, 0.0, 0.8], [0.05, 0.0, 0.8], [0.0, 0.8, 0.8], [0.02, 0.0, 0.8]])
+    dirs = torch.tensor([[0.0, 0.0, -1.0]] * 4)  # the third passes beside the cube
+    bg, obj = torch.full((4, 3), 0.5), torch.zeros(4, dtype=torch.long)
+    guide = SurfaceGuide(torch.tensor([0.75, 0.0, 0.8, 0.7]), share=0.5, sigma=0.0)
+    runs = []
+    for g in (guide, None):
+        generator = torch.Generator().manual_seed(3)
+        runs.append(model.render_rays(codes, obj, origins, dirs, bg, True, generator, g))
+    (coarse, fine), (plain_coarse, plain_fine) = runs
+    torch.testing.assert_close(coarse.t, plain_coarse.t)
+    assert (fine.t[0] == 0.75).sum() == 4 and (fine.t[3] == 0.7).sum() == 4  # half of the 8 fine samples
+    torch.testing.assert_close(fine.t[1], plain_fine.t[1])  # depth 0: no surface, samples as without a guide

@@ -145,3 +145,30 @@ def test_the_pixel_labelling_head_refuses_jittered_crops(tiny_train_config):
     config = tiny_train_config(input_jitter=1.0)
     with pytest.raises(AffnerfError, match="input-jitter 0"):
         train(replace(config, model=replace(config.model, view_affordance_weight=0.1)))
+
+
+def test_surface_samples_are_logged_falling_to_zero_and_resume_to_the_same_weights(tiny_train_config, tmp_path):
+    config = tiny_train_config(out=tmp_path / "guided", steps=20, log_every=1, surface_sample_share=0.5)
+    train(replace(config, surface_sample_until=0.5))
+    shares = [r["train/surface_sample_share"] for r in _metrics(config.out)]
+    assert shares[0] > shares[4] > 0 and shares[-1] == 0.0
+    straight = tiny_train_config(out=tmp_path / "straight", surface_sample_share=0.5)
+    a, b = straight_and_resumed_weights(straight, stop_at=10)
+    assert all(torch.equal(a[k], b[k]) for k in a)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"surface_sample_share": 1.5}, "in \\(0, 1\\]"),
+        ({"surface_sample_until": 0.0}, "in \\(0, 1\\]"),
+        ({"surface_sample_sigma": -0.01}, "sigma >= 0"),
+        ({"num_fine": 0}, "needs fine samples"),
+        ({"kind": "gsnerf"}, "samples each point on its own"),
+    ],
+)
+def test_surface_samples_refuse_what_they_cannot_move(tiny_train_config, overrides, message):
+    config = tiny_train_config(surface_sample_share=overrides.pop("surface_sample_share", 0.5))
+    model = {k: overrides.pop(k) for k in ("num_fine", "kind") if k in overrides}
+    with pytest.raises(AffnerfError, match=message):
+        train(replace(config, model=replace(config.model, **model), **overrides))

@@ -13,6 +13,7 @@ from affnerf.model.config import POINTS_PER_CHUNK, ModelConfig
 from affnerf.model.field import ConditionalField, PointGeometry
 from affnerf.model.raymarch import Condition, FieldRenderer, RayOutputs
 from affnerf.rendering.grid import OccupancyGrid, build_grid
+from affnerf.rendering.samplers import SurfaceGuide
 
 
 class ConditionedNeRF(nn.Module, ABC):
@@ -75,10 +76,13 @@ class ConditionedNeRF(nn.Module, ABC):
         background: torch.Tensor,
         perturb: bool = False,
         generator: torch.Generator | None = None,
+        guide: SurfaceGuide | None = None,
     ) -> tuple[RayOutputs, RayOutputs | None]:
-        """Render rays of encoded objects; ``ray_object`` (R,) indexes the objects of ``encoding``."""
+        """Render rays of encoded objects; ``ray_object`` (R,) indexes the objects of ``encoding``; ``guide``
+        (training only) draws a share of the fine samples around the rays' true surface
+        (:meth:`FieldRenderer.render_rays`)."""
         return self.renderer.render_rays(
-            self.condition(encoding, ray_object), origins, dirs, background, perturb, generator
+            self.condition(encoding, ray_object), origins, dirs, background, perturb, generator, guide
         )
 
     def render_rays_in_grid(

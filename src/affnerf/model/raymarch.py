@@ -18,7 +18,13 @@ from affnerf.model.config import ModelConfig
 from affnerf.model.field import Code, ConditionalField
 from affnerf.rendering.grid import OccupancyGrid, occupied_samples
 from affnerf.rendering.rays import intersect_aabb
-from affnerf.rendering.samplers import merge_samples, pdf_samples, stratified_samples
+from affnerf.rendering.samplers import (
+    SurfaceGuide,
+    guided_samples,
+    merge_samples,
+    pdf_samples,
+    stratified_samples,
+)
 from affnerf.rendering.volume import (
     accumulate,
     composite,
@@ -183,6 +189,7 @@ class FieldRenderer(nn.Module):
         background: torch.Tensor,
         perturb: bool = False,
         generator: torch.Generator | None = None,
+        guide: SurfaceGuide | None = None,
     ) -> tuple[RayOutputs, RayOutputs | None]:
         """Render R rays, coarse then fine; only rays that cross the sampled region evaluate the field.
 
@@ -193,6 +200,9 @@ class FieldRenderer(nn.Module):
             background: (R, 3) colour behind each ray.
             perturb: random sample positions (training) or deterministic ones.
             generator: random source when perturbing.
+            guide: training only: the R rays' true depths, so a share of each surface ray's fine samples is drawn
+                around its surface (:func:`~affnerf.rendering.samplers.guided_samples`); None: all from the
+                coarse weights. No effect without fine samples.
 
         Returns:
             The coarse and the fine stage's outputs for all R rays (fine is None without fine samples; the coarse
@@ -207,8 +217,11 @@ class FieldRenderer(nn.Module):
             coarse = self._stage(self.coarse, t_coarse, f_, o, d, idx, condition, bg)
         if c.num_fine == 0:
             return scatter_rays(coarse, hit, background), None
-        t_fine = merge_samples(t_coarse, pdf_samples(t_coarse, coarse.weights, c.num_fine, perturb, generator))
-        fine = self._stage(self.fine_field(), t_fine, f_, o, d, idx, condition, bg)
+        t_drawn = pdf_samples(t_coarse, coarse.weights, c.num_fine, perturb, generator)
+        if guide is not None:
+            hit_guide = SurfaceGuide(guide.depth[idx], guide.share, guide.sigma)
+            t_drawn = guided_samples(t_drawn, hit_guide, n_, f_, generator)
+        fine = self._stage(self.fine_field(), merge_samples(t_coarse, t_drawn), f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)
 
     def coarse_gradients(self) -> torch.autograd.grad_mode.set_grad_enabled:

@@ -1,6 +1,9 @@
-"""Where to evaluate the field along each ray: stratified samples and hierarchical (inverse-CDF) samples."""
+"""Where to evaluate the field along each ray: stratified samples, hierarchical (inverse-CDF) samples and, in
+training, samples drawn around the true surface (depth-guided sampling)."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import torch
 
@@ -89,3 +92,85 @@ def merge_samples(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     """(R, Sa + Sb) sorted union of two sets of samples per ray."""
     merged, _ = torch.sort(torch.cat([a, b], dim=-1), dim=-1)
     return merged
+
+
+@dataclass(frozen=True)
+class SurfaceGuide:
+    """Where a training step's rays meet the true surface, so that a share of each such ray's fine samples is drawn
+    around it instead of from the coarse weights (depth-guided sampling, as DS-NeRF and Dense Depth Priors place
+    samples near known depth early in training).
+
+    Attributes:
+        depth: (R,) true z-depth of each ray in metres (0 = the ray meets no surface: its samples are not moved).
+        share: fraction of a ray's fine samples drawn around the surface, in [0, 1].
+        sigma: standard deviation in metres of those draws along the ray.
+    """
+
+    depth: torch.Tensor
+    share: float
+    sigma: float
+
+
+def surface_samples(
+    depth: torch.Tensor,
+    near: torch.Tensor,
+    far: torch.Tensor,
+    num: int,
+    sigma: float,
+    generator: torch.Generator | None = None,
+) -> torch.Tensor:
+    """Draw ``num`` samples per ray from a normal around its true depth, kept inside the ray's interval.
+
+    Args:
+        depth: (R,) true z-depth (the ray parameter at the surface).
+        near: (R,) start of each ray's interval.
+        far: (R,) end of each ray's interval.
+        num: samples per ray.
+        sigma: standard deviation of the draws, metres (0: every sample at the depth).
+        generator: random source.
+
+    Returns:
+        (R, num) increasing samples in [near, far].
+
+    Example:
+        >>> surface_samples(torch.tensor([0.5, 2.0]), torch.zeros(2), torch.ones(2), 2, 0.0).tolist()
+        [[0.5, 0.5], [1.0, 1.0]]
+    """
+    noise = torch.randn((depth.shape[0], num), generator=generator, dtype=depth.dtype, device="cpu")
+    t = depth[:, None] + sigma * noise.to(depth.device)
+    t, _ = torch.sort(torch.minimum(torch.maximum(t, near[:, None]), far[:, None]), dim=-1)
+    return t
+
+
+def guided_samples(
+    t: torch.Tensor,
+    guide: SurfaceGuide,
+    near: torch.Tensor,
+    far: torch.Tensor,
+    generator: torch.Generator | None = None,
+) -> torch.Tensor:
+    """Replace the first ``round(guide.share * S)`` of each surface ray's S samples by draws around its depth
+    (:func:`surface_samples`); rays that meet no surface (depth 0) keep theirs.
+
+    Args:
+        t: (R, S) samples per ray (for example :func:`pdf_samples`'s).
+        guide: the rays' true depths, the share and the spread (``depth`` indexed like ``t``'s rays).
+        near: (R,) start of each ray's interval.
+        far: (R,) end of each ray's interval.
+        generator: random source.
+
+    Returns:
+        (R, S) samples, increasing along each ray.
+
+    Example:
+        >>> t = torch.tensor([[0.125, 0.25, 0.375, 0.5], [0.125, 0.25, 0.375, 0.5]])
+        >>> g = SurfaceGuide(torch.tensor([0.75, 0.0]), share=0.5, sigma=0.0)
+        >>> guided_samples(t, g, torch.zeros(2), torch.ones(2)).tolist()
+        [[0.375, 0.5, 0.75, 0.75], [0.125, 0.25, 0.375, 0.5]]
+    """
+    k = round(guide.share * t.shape[1])
+    if k == 0:
+        return t
+    drawn = surface_samples(guide.depth, near, far, t.shape[1], guide.sigma, generator)
+    moved = (guide.depth > 0)[:, None] & (torch.arange(t.shape[1], device=t.device) < k)[None, :]
+    return torch.sort(torch.where(moved, drawn, t), dim=-1).values

@@ -151,6 +151,14 @@ class TrainConfig:
             and IF-Net draw such a share beside the near-surface points); the rest is split between the two sigmas.
             0.1 against the presets' quarter, two seeds from scratch: one ahead, one behind, F@1cm behind in all four
             pairs (results/point_sigma.md).
+        surface_sample_share: share of the fine samples of each ray that meets the object drawn around its true
+            depth from the dataset's depth maps instead of from the coarse weights, at the first step (0 = off,
+            the paper; :class:`affnerf.rendering.samplers.SurfaceGuide`). Beyond the paper: depth-guided sampling
+            (DS-NeRF, Dense Depth Priors) evaluates the field at the surface, thin parts included, before the
+            coarse weights know where it is. It falls in a straight line to 0 at ``surface_sample_until`` of the
+            run, so the end of training samples as inference does. Needs fine samples.
+        surface_sample_sigma: standard deviation in metres of those draws along the ray.
+        surface_sample_until: fraction of the run's steps after which no sample is drawn so, in (0, 1].
         image_scale: training resolution as a fraction of the dataset's images.
         categories: comma-separated categories to train on (empty = all of the train split).
         checkpoint_every: steps between checkpoints (0 = only at the end of the run and when out of time).
@@ -213,6 +221,9 @@ class TrainConfig:
     point_sigma_far: float = 0.02
     point_part_balance: float = 0.0
     point_uniform_share: float = 0.25
+    surface_sample_share: float = 0.0
+    surface_sample_sigma: float = 0.01
+    surface_sample_until: float = 0.5
     image_scale: float = 1.0
     categories: str = ""
     checkpoint_every: int = 2000

@@ -29,7 +29,8 @@ from affnerf.train.validate import validate
 #: rays' ``loss/lovasz`` (unweighted, summed over the stages); the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``; with AFF-NeRF's
 #: pixel-labelling head ``loss/view_affordance``; each weighted) and
-#: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``).
+#: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``;
+#: with depth-guided sampling its share, ``train/surface_sample_share``).
 IterationOutputs = dict[str, torch.Tensor | float]
 
 
@@ -87,7 +88,7 @@ class LogScalars:
     )
 
     #: The step's scheduled values (floats, the same on every rank): logged as they are, never averaged.
-    SCHEDULED = ("train/lr", "train/points_weight")
+    SCHEDULED = ("train/lr", "train/points_weight", "train/surface_sample_share")
 
     def __init__(
         self, config: TrainConfig, ctx: dist_utils.Context, logger: MetricsLogger, bar: tqdm, started: float

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from affnerf.errors import AffnerfError
 from affnerf.train.config import TrainConfig
 
-__all__ = ["check_options", "refuse_negative"]
+__all__ = ["check_options", "check_surface_samples", "refuse_negative"]
 
 
 def check_options(config: TrainConfig) -> None:
@@ -51,6 +51,7 @@ def check_options(config: TrainConfig) -> None:
             f"--edge-fraction is a share of the --foreground-fraction rays (0 to {config.foreground_fraction}) and "
             f"--edge-radius >= 0, not {config.edge_fraction} and {config.edge_radius}"
         )
+    check_surface_samples(config)
     if not 0 <= config.cut_input_weight <= 1:
         raise AffnerfError(f"--cut-input-weight is in [0, 1] (1 = every frame alike), not {config.cut_input_weight}")
     refuse_negative(
@@ -65,6 +66,25 @@ def check_options(config: TrainConfig) -> None:
         "lovasz-weight": config.lovasz_weight,
     }
     refuse_negative(weights, "a weight (>= 0; 0 = off)")
+
+
+def check_surface_samples(config: TrainConfig) -> None:
+    """Refuse depth-guided sampling out of range, without fine samples to move, or for the models whose samples
+    are placed along whole rays by their own sampler (Semantic-Ray, GSNeRF)."""
+    if config.surface_sample_share == 0:
+        return
+    c = config
+    if not (0 < c.surface_sample_share <= 1 and 0 < c.surface_sample_until <= 1 and c.surface_sample_sigma >= 0):
+        raise AffnerfError(
+            "--surface-sample-share and --surface-sample-until are in (0, 1] and --surface-sample-sigma >= 0, not "
+            f"{c.surface_sample_share}, {c.surface_sample_until} and {c.surface_sample_sigma}"
+        )
+    if c.model.num_fine == 0 or c.model.kind in ("semantic-ray", "gsnerf"):
+        raise AffnerfError(
+            "--surface-sample-share needs fine samples (--model.num-fine > 0) and a model that samples each point "
+            f"on its own (affnerf, pose-aware, pixelnerf), not --model.kind {c.model.kind} with "
+            f"{c.model.num_fine} fine samples"
+        )
 
 
 def refuse_negative(options: Mapping[str, float], meaning: str) -> None:

@@ -1,6 +1,7 @@
-"""Per-step schedules of a run: the learning rate and the weight of the 3D supervision.
+"""Per-step schedules of a run: the learning rate, the weight of the 3D supervision and the share of fine samples
+drawn around the true surface.
 
-Both are pure functions of the resolved config and the step (steps done so far, 0-based), so a resumed run and a
+All are pure functions of the resolved config and the step (steps done so far, 0-based), so a resumed run and a
 fresh one take the same values at the same step.
 """
 
@@ -66,3 +67,19 @@ def points_weight(config: TrainConfig, step: int) -> float:
         return config.points_weight
     frac = _progress(step, 0, config.steps)
     return (1.0 - frac) * config.points_weight + frac * config.points_weight_final
+
+
+def surface_sample_share(config: TrainConfig, step: int) -> float:
+    """The share of each surface ray's fine samples drawn around its true depth at ``step``: a straight line from
+    ``surface_sample_share`` at step 0 to 0 at ``surface_sample_until`` of ``steps``, 0 after.
+
+    Example:
+        >>> from pathlib import Path
+        >>> c = TrainConfig(data=Path("."), out=Path("."), steps=100, surface_sample_share=0.5)
+        >>> [surface_sample_share(c, s) for s in (0, 25, 50, 80)]
+        [0.5, 0.25, 0.0, 0.0]
+    """
+    if config.surface_sample_share <= 0:
+        return 0.0
+    frac = _progress(step, 0, round(config.surface_sample_until * config.steps))
+    return config.surface_sample_share * (1.0 - frac)

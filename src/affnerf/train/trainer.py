@@ -29,6 +29,7 @@ from affnerf.model.base import ConditionedNeRF
 from affnerf.model.field import PointGeometry
 from affnerf.model.raymarch import RayOutputs
 from affnerf.model.registry import build_model
+from affnerf.rendering.samplers import SurfaceGuide
 from affnerf.train import distributed as dist_utils
 from affnerf.train.augment import jitter_crops
 from affnerf.train.cache import ObjectFrames
@@ -51,7 +52,7 @@ from affnerf.train.points import DISTANCE_TRUNCATION
 from affnerf.train.precision import forward_precision
 from affnerf.train.run_cache import load_frames, load_points
 from affnerf.train.sampler import PointBatch, PointSampler, RayBatch, RaySampler
-from affnerf.train.schedule import learning_rate, points_weight
+from affnerf.train.schedule import learning_rate, points_weight, surface_sample_share
 from affnerf.train.state import TrainingState, make_optimizer, params_checksum, prepare_run_folder
 
 log = logging.getLogger(__name__)
@@ -115,15 +116,22 @@ class TrainingPass(torch.nn.Module):
         self.consistency_weight = consistency_weight
 
     def forward(
-        self, batch: RayBatch, generator: torch.Generator, points: PointBatch | None = None
+        self,
+        batch: RayBatch,
+        generator: torch.Generator,
+        points: PointBatch | None = None,
+        guide: tuple[float, float] = (0.0, 0.0),
     ) -> tuple[RayOutputs, RayOutputs | None, list[PointGeometry] | None, dict[str, torch.Tensor]]:
         """(coarse, fine, per-field geometry at the points or None, the model's auxiliary losses), as
-        ``model.forward`` + points."""
+        ``model.forward`` + points; ``guide`` (share, sigma): a share > 0 draws that share of the fine samples of
+        the batch's surface rays around their true depth (:class:`SurfaceGuide`)."""
         m, v = self.model, self.encoded_views
         encoding = m.encode_views(batch.images[:, :v], batch.input_intrinsics[:, :v], batch.input_poses[:, :v])
-        coarse, fine = m.render_rays(
-            encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator
-        )
+        rays = (encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator)
+        if guide[0] > 0:
+            coarse, fine = m.render_rays(*rays, guide=SurfaceGuide(batch.depth, *guide))
+        else:
+            coarse, fine = m.render_rays(*rays)
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
         auxiliary = m.auxiliary_losses(encoding, batch.input_depth[:, :v], batch.input_labels[:, :v])
         if self.consistency_weight > 0:
@@ -252,7 +260,8 @@ class Trainer:
         ``loss/affordance_ce`` and ``train/affordance_accuracy`` of the finest pass (the fine one, the coarse one in
         a coarse-only model), with the ``train/lr`` used (a float); with points, also ``loss/occupancy`` and
         ``loss/point_affordance`` (and a signed-distance field's ``loss/point_distance``) of the finest field and the
-        step's μ (``train/points_weight``, a float); and the
+        step's μ (``train/points_weight``, a float); with depth-guided sampling its share
+        (``train/surface_sample_share``, a float); and the
         model's auxiliary losses (the pose-aware model's ``loss/camera``, GSNeRF's ``loss/source_depth``).
         """
         config, state = self.config, self.state
@@ -267,8 +276,9 @@ class Trainer:
             batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
         points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
         mu = points_weight(config, step)
+        guide = (surface_sample_share(config, step), config.surface_sample_sigma)
         with forward_precision(config.precision, self.ctx.device):
-            total, outputs = self._loss(batch, points, mu)
+            total, outputs = self._loss(batch, points, mu, guide)
         state.optimizer.zero_grad(set_to_none=True)
         total.backward()
         if config.optim.grad_clip > 0:
@@ -277,14 +287,17 @@ class Trainer:
         if state.ema is not None:
             state.ema.update(state.model)
         scheduled = {"train/lr": lr} if points is None else {"train/lr": lr, "train/points_weight": mu}
+        if config.surface_sample_share > 0:
+            scheduled["train/surface_sample_share"] = guide[0]
         return {"loss/total": total.detach(), **outputs, **scheduled}
 
     def _loss(
-        self, batch: RayBatch, points: PointBatch | None, mu: float
+        self, batch: RayBatch, points: PointBatch | None, mu: float, guide: tuple[float, float] = (0.0, 0.0)
     ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
-        """The step's total loss and its detached parts (see :meth:`train_iteration`); ``mu``: the points' weight."""
+        """The step's total loss and its detached parts (see :meth:`train_iteration`); ``mu``: the points' weight;
+        ``guide``: the step's share and spread of fine samples drawn around the true surface."""
         config = self.config
-        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points)
+        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points, guide)
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
         parts = {
