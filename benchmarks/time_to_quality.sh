@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Time to quality with the shipped recipe (issue 12; benchmarks/results/time_to_quality_current.md): the `small`
-# preset as it now ships (8 objects a step, 256 rays, 512 points an object) from scratch on ONE core, one schedule
-# (1e-3 -> 2e-5) that ends when MINUTES (22, a third of the 66 minutes of one core the model shipped when the issue
-# was filed trained for) do, then every checkpoint and that original model scored by time_to_quality.py on its 16
-# validation objects that neither model saw. The frame and point cache is built before the clock starts.
+# preset as it ships (its own schedule, planned for STEPS) from scratch on ONE core, stopped when MINUTES are up
+# (22, a third of the 66 minutes of one core the model shipped when the issue was filed trained for), then every
+# checkpoint and that original model scored by time_to_quality.py on its 16 validation objects that neither saw.
+# The frame and point cache is built before the clock starts.
 #   DATA=... ORIGINAL=original.pt benchmarks/time_to_quality.sh
 # ORIGINAL: `git show 17260ac:src/affnerf/weights/affnerf-small.pt > original.pt` (2026-11-23 morning).
 set -euo pipefail
