@@ -156,7 +156,10 @@ class TrainConfig:
             the paper; :class:`affnerf.rendering.samplers.SurfaceGuide`). Beyond the paper: depth-guided sampling
             (DS-NeRF, Dense Depth Priors) evaluates the field at the surface, thin parts included, before the
             coarse weights know where it is. It falls in a straight line to 0 at ``surface_sample_until`` of the
-            run, so the end of training samples as inference does. Needs fine samples.
+            run, so the end of training samples as inference does. Needs fine samples. At 0.5 from scratch on two
+            seeds, level on mIoU with the ``small`` preset, behind on 3D affordance mIoU (−0.026 / −0.013) and no
+            faster early on: its 3D supervision already teaches the surface (benchmarks/results/surface_samples.md);
+            so off in both presets.
         surface_sample_sigma: standard deviation in metres of those draws along the ray.
         surface_sample_until: fraction of the run's steps after which no sample is drawn so, in (0, 1].
         image_scale: training resolution as a fraction of the dataset's images.
