@@ -49,5 +49,5 @@ def overexposure_warning(image: Path, share: float) -> str | None:
     return (
         f"{image}: the photo is overexposed ({share:.0%} of the object's pixels have a colour channel at its maximum), "
         f"and the model's labels may be wrong (on test objects photographed 1.4 times too bright, the overexposed ones "
-        f"lost 0.29 mIoU on average); a photo with less exposure, or without direct light on the object, is better"
+        f"lost 0.3 mIoU); a photo with less exposure, or without direct light on the object, is better"
     )
