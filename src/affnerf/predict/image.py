@@ -28,7 +28,6 @@ from PIL import Image
 from affnerf.data.crop import crop_object, object_bbox, touches_border
 from affnerf.data.images import open_image, to_rgb8
 from affnerf.errors import input_error
-from affnerf.predict.exposure import OVEREXPOSED_SHARE, clipped_share, overexposure_warning
 from affnerf.predict.segment import (
     MIN_AGREEMENT,
     MIN_SEGMENTER_CONFIDENCE,
@@ -141,8 +140,6 @@ class PreparedImage:
         rgb: (H, W, 3) uint8 original image.
         bbox: (x0, y0, x1, y1) of the object in the original image.
         separation: how the object was separated (``source``) and how confidently.
-        clipped_share: share of the object's pixels with a clipped colour channel
-            (:func:`affnerf.predict.exposure.clipped_share`; over ``OVEREXPOSED_SHARE`` the photo is overexposed).
     """
 
     crop: np.ndarray
@@ -150,11 +147,6 @@ class PreparedImage:
     rgb: np.ndarray
     bbox: tuple[int, int, int, int]
     separation: Separation
-    clipped_share: float = 0.0
-
-    def exposure_json(self) -> dict[str, float | bool]:
-        """The ``exposure`` entry of ``prediction.json``."""
-        return {"clipped_share": round(self.clipped_share, 4), "overexposed": self.clipped_share > OVEREXPOSED_SHARE}
 
     @property
     def source(self) -> str:
@@ -274,9 +266,8 @@ def prepare_image(
         outside: the model's ``crop_outside``: ``checker`` marks where the crop leaves the photo.
 
     Logs a one-line warning naming the image when the separation is doubtful (see :class:`Separation`), else when
-    the object reaches the image's edge (``Separation.cut_off``); another when the object is overexposed
-    (:mod:`affnerf.predict.exposure`); and one when ``auto`` falls back because the optional salient model is not
-    installed.
+    the object reaches the image's edge (``Separation.cut_off``), and when ``auto`` falls back because the optional
+    salient model is not installed.
 
     Raises:
         AffnerfError: naming the file, for a missing or unreadable image or mask, or an image with no object
@@ -299,12 +290,7 @@ def prepare_image(
     warning = separation.warning(image) or separation.cut_off_warning(image)  # a doubtful mask's line comes first
     if warning:
         logger.warning("%s", warning)
-    clipped = clipped_share(rgb, obj)
-    exposure = overexposure_warning(image, clipped)
-    if exposure:
-        logger.warning("%s", exposure)
-    crop = crop_object(rgb, obj, crop_size, background, outside=outside)
-    return PreparedImage(crop, obj, rgb, bbox, separation, clipped)
+    return PreparedImage(crop_object(rgb, obj, crop_size, background, outside=outside), obj, rgb, bbox, separation)
 
 
 def save_mask(path: Path, mask: np.ndarray) -> None:

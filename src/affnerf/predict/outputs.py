@@ -261,7 +261,6 @@ def write_prediction(predictor: Predictor, config: PredictConfig) -> dict[str, A
             "model_step": predictor.loaded.step,
             "object_separated_by": obj.prepared.source,
             "separation": obj.prepared.separation.to_json(),
-            "exposure": obj.prepared.exposure_json(),
             "object_bbox": list(obj.prepared.bbox),
             "classes_present": [names[c] for c in sorted(areas)],
             "surface_area_m2": {names[c]: round(a, 6) for c, a in sorted(areas.items())},
