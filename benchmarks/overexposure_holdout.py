@@ -20,14 +20,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bench_segment import score_photo
-from photo_conditions import CONDITIONS
-from PIL import Image
+from photo_conditions import CONDITIONS, lighting_case, score_lit_photo
 
 from affnerf.data.dataset import Dataset
 from affnerf.environment import describe_machine
-from affnerf.eval.protocol import ProtocolConfig, choose_views
-from affnerf.eval.surface import sample_seed, true_samples
+from affnerf.eval.protocol import ProtocolConfig
 from affnerf.predict.predictor import Predictor
 from affnerf.predict.shipped import shipped_model
 
@@ -43,14 +40,13 @@ def clipped_share(rgb: np.ndarray, mask: np.ndarray) -> float:
 
 def score_object(predictor: Predictor, obj: Any, tmp: Path) -> dict[str, Any]:
     """The object's clean and overexposed mIoU and the overexposed photo's clipped share."""
-    (view,), targets = choose_views(len(obj), obj.record.object_id, ProtocolConfig(1, 5, seed=0))
-    rng = np.random.default_rng(sample_seed(0, obj.record.object_id))
-    truth, mask = true_samples(obj, 0), obj.affordance(view) > 0
+    case = lighting_case(obj, ProtocolConfig(1, 5, seed=0))
+    view, _, rng, _, mask = case
     row: dict[str, Any] = {"object": obj.record.object_id}
     for name in ("clean", BRIGHT):
-        photo, image = tmp / "photo.png", CONDITIONS[name](obj.rgb(view), rng)
-        Image.fromarray(np.dstack([image, mask.astype(np.uint8) * 255])).save(photo)
-        row["clean" if name == "clean" else "bright"] = score_photo(predictor, obj, photo, targets, 30, truth)["miou"]
+        image = CONDITIONS[name](obj.rgb(view), rng)
+        scores = score_lit_photo(predictor, obj, image, case, tmp, 30)
+        row["clean" if name == "clean" else "bright"] = scores["miou"]
         row["clipped_share"] = clipped_share(image, mask)
     return row
 

@@ -82,6 +82,24 @@ CONDITIONS = {
 }
 
 
+def lighting_case(obj: Any, protocol: ProtocolConfig) -> tuple[int, list[int], np.random.Generator, Any, np.ndarray]:
+    """An object's input view, target views, random source of the changes, 3D truth and (H, W) true mask."""
+    (view,), targets = choose_views(len(obj), obj.record.object_id, protocol)
+    rng = np.random.default_rng(sample_seed(0, obj.record.object_id))
+    return view, targets, rng, true_samples(obj, 0), obj.affordance(view) > 0
+
+
+def score_lit_photo(
+    predictor: Predictor, obj: Any, image: np.ndarray, case: tuple, tmp: Path, fit_steps: int
+) -> dict[str, float]:
+    """Predict the changed (H, W, 3) ``image`` with the ``case``'s true mask as its alpha (lighting only, not
+    separation), as ``predict`` does, and score it at the case's target views (:func:`lighting_case`)."""
+    _, targets, _, truth, mask = case
+    photo = tmp / "photo.png"
+    Image.fromarray(np.dstack([image, mask.astype(np.uint8) * 255])).save(photo)
+    return score_photo(predictor, obj, photo, targets, fit_steps, truth)
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Predict every chosen object under every condition; the per-object scores and the run's settings."""
     ds = Dataset.open(args.data)
@@ -92,14 +110,11 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         for category in args.categories.split(","):
             for entry in ds.objects("test", category)[: args.objects]:
                 obj = ds.load_object(entry)
-                (view,), targets = choose_views(len(obj), obj.record.object_id, protocol)
-                rng = np.random.default_rng(sample_seed(0, obj.record.object_id))
-                truth = true_samples(obj, 0)  # once per object, for every condition
+                case = lighting_case(obj, protocol)  # the 3D truth once per object, for every condition
+                view, _, rng, _, _ = case
                 for name, change in CONDITIONS.items():
-                    photo = Path(tmp) / "photo.png"
-                    alpha = (obj.affordance(view) > 0).astype(np.uint8) * 255  # the true mask: lighting only
-                    Image.fromarray(np.dstack([change(obj.rgb(view), rng), alpha])).save(photo)
-                    scores = score_photo(predictor, obj, photo, targets, args.fit_steps, truth)
+                    image = change(obj.rgb(view), rng)
+                    scores = score_lit_photo(predictor, obj, image, case, Path(tmp), args.fit_steps)
                     rows.append({"object": obj.record.object_id, "category": category, "condition": name, **scores})
                     print(
                         f"{obj.record.object_id:16s} {name:36s} mIoU {scores['miou']:.3f} F {scores['fscore_1cm']:.3f}"

@@ -9,7 +9,7 @@ shared by an object's points, a factored :class:`~affnerf.model.field.ObjectCode
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import torch
 from torch import nn
@@ -219,8 +219,7 @@ class FieldRenderer(nn.Module):
             return scatter_rays(coarse, hit, background), None
         t_drawn = pdf_samples(t_coarse, coarse.weights, c.num_fine, perturb, generator)
         if guide is not None:
-            hit_guide = SurfaceGuide(guide.depth[idx], guide.share, guide.sigma)
-            t_drawn = guided_samples(t_drawn, hit_guide, n_, f_, generator)
+            t_drawn = guided_samples(t_drawn, replace(guide, depth=guide.depth[idx]), n_, f_, generator)
         fine = self._stage(self.fine_field(), merge_samples(t_coarse, t_drawn), f_, o, d, idx, condition, bg)
         return scatter_rays(coarse, hit, background), scatter_rays(fine, hit, background)
 

@@ -109,27 +109,34 @@ class TrainingPass(torch.nn.Module):
     With ``consistency_weight`` > 0 the batch holds one more view per object than the model encodes
     (``encoded_views``); its codes only enter ``loss/view_consistency`` (:func:`code_consistency`, weighted)."""
 
-    def __init__(self, model: ConditionedNeRF, encoded_views: int = 1, consistency_weight: float = 0.0) -> None:
+    def __init__(
+        self,
+        model: ConditionedNeRF,
+        encoded_views: int = 1,
+        consistency_weight: float = 0.0,
+        surface_sigma: float = 0.0,
+    ) -> None:
         super().__init__()
         self.model = model
         self.encoded_views = encoded_views
         self.consistency_weight = consistency_weight
+        self.surface_sigma = surface_sigma
 
     def forward(
         self,
         batch: RayBatch,
         generator: torch.Generator,
         points: PointBatch | None = None,
-        guide: tuple[float, float] = (0.0, 0.0),
+        surface_share: float = 0.0,
     ) -> tuple[RayOutputs, RayOutputs | None, list[PointGeometry] | None, dict[str, torch.Tensor]]:
         """(coarse, fine, per-field geometry at the points or None, the model's auxiliary losses), as
-        ``model.forward`` + points; ``guide`` (share, sigma): a share > 0 draws that share of the fine samples of
-        the batch's surface rays around their true depth (:class:`SurfaceGuide`)."""
+        ``model.forward`` + points; ``surface_share`` > 0 draws that share of the fine samples of the batch's
+        surface rays around their true depth, ``surface_sigma`` apart (:class:`SurfaceGuide`)."""
         m, v = self.model, self.encoded_views
         encoding = m.encode_views(batch.images[:, :v], batch.input_intrinsics[:, :v], batch.input_poses[:, :v])
         rays = (encoding, batch.ray_object, batch.origins, batch.dirs, batch.background, True, generator)
-        if guide[0] > 0:
-            coarse, fine = m.render_rays(*rays, guide=SurfaceGuide(batch.depth, *guide))
+        if surface_share > 0:
+            coarse, fine = m.render_rays(*rays, guide=SurfaceGuide(batch.depth, surface_share, self.surface_sigma))
         else:
             coarse, fine = m.render_rays(*rays)
         geometry = None if points is None else m.point_geometry(encoding, points.point_object, points.points)
@@ -202,7 +209,9 @@ class Trainer:
             source = self.state.start_from(config.init_from, len(self.dataset.affordance_classes))
             if ctx.is_main:
                 log.info("started from the weights of %s", source)
-        self.net = TrainingPass(self.state.model, config.input_views, config.view_consistency_weight)
+        self.net = TrainingPass(
+            self.state.model, config.input_views, config.view_consistency_weight, config.surface_sample_sigma
+        )
         if ctx.distributed:
             device_ids = [ctx.device.index] if ctx.device.type == "cuda" else None
             self.net = DistributedDataParallel(self.net, device_ids=device_ids)
@@ -276,9 +285,9 @@ class Trainer:
             batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
         points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
         mu = points_weight(config, step)
-        guide = (surface_sample_share(config, step), config.surface_sample_sigma)
+        share = surface_sample_share(config, step)
         with forward_precision(config.precision, self.ctx.device):
-            total, outputs = self._loss(batch, points, mu, guide)
+            total, outputs = self._loss(batch, points, mu, share)
         state.optimizer.zero_grad(set_to_none=True)
         total.backward()
         if config.optim.grad_clip > 0:
@@ -288,16 +297,16 @@ class Trainer:
             state.ema.update(state.model)
         scheduled = {"train/lr": lr} if points is None else {"train/lr": lr, "train/points_weight": mu}
         if config.surface_sample_share > 0:
-            scheduled["train/surface_sample_share"] = guide[0]
+            scheduled["train/surface_sample_share"] = share
         return {"loss/total": total.detach(), **outputs, **scheduled}
 
     def _loss(
-        self, batch: RayBatch, points: PointBatch | None, mu: float, guide: tuple[float, float] = (0.0, 0.0)
+        self, batch: RayBatch, points: PointBatch | None, mu: float, surface_share: float = 0.0
     ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         """The step's total loss and its detached parts (see :meth:`train_iteration`); ``mu``: the points' weight;
-        ``guide``: the step's share and spread of fine samples drawn around the true surface."""
+        ``surface_share``: the step's share of fine samples drawn around the true surface."""
         config = self.config
-        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points, guide)
+        coarse, fine, geometry, auxiliary = self.net(batch, self.state.generator, points, surface_share)
         terms = nerf_loss(coarse, fine, batch.rgb, batch.labels, config.affordance_weight, self.class_weight)
         final = fine if fine is not None else coarse  # affordance (R, C) class probabilities
         parts = {
