@@ -94,16 +94,12 @@ $A eval --run "$W/affnerf" --data "$W/data" --split test --method affnerf-fit --
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --out "$E" $EVAL
 $A eval --run "$W/pixelnerf-full" --data "$W/data" --split test --method pixelnerf --input-views 3 --out "$E" $EVAL
 
-# 4b. every method on the baselines' shared protocol (posed methods: 3 views; targets follow the inputs in the
-#     seeded view order)
+# 4b. every method on the baselines' shared protocol, in one call (posed methods: 3 views, each from its own run;
+#     targets follow the inputs in the seeded view order)
 B="$W/eval-base"
-$A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method affnerf,retrieval,constant \
-    --out "$B" $BASE
-for kind in pixelnerf semantic-ray gsnerf; do
-    $A eval --run "$W/$kind" --data "$W/data" --split test --method "$kind" --input-views 3 --out "$B" $BASE
-done
-$A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test --method semantic-nerf --input-views 3 \
-    --semantic-steps 200 --out "$B" $BASE
+$A eval --run src/affnerf/weights/affnerf-small.pt --data "$W/data" --split test \
+    --method affnerf,retrieval,constant,pixelnerf-3v,semantic-ray-3v,gsnerf-3v,semantic-nerf-3v \
+    --runs "pixelnerf=$W/pixelnerf,semantic-ray=$W/semantic-ray,gsnerf=$W/gsnerf" --semantic-steps 200 --out "$B" $BASE
 
 # 4c. the per-object mesh level against one level for all (same grids), and view stability (4 input views of every
 #     test object; the committed run: benchmarks/gpu_eval.sh on a lent GPU, 3.5 min there, hours on the CPU)

@@ -78,6 +78,50 @@ def test_every_method_gives_metrics_a_table_and_a_figure(trained_runs, train_dat
     assert constant["mean"]["PA_object"] == 0.0 and constant["mean"]["PSNR"] is None
 
 
+def test_one_call_evaluates_every_method_with_its_own_run_and_views(trained_runs, train_dataset, tmp_path):
+    out = tmp_path / "eval"
+    runs = f"pixelnerf={trained_runs['pixelnerf']}"
+    assert _eval(trained_runs["affnerf"], train_dataset, out, "affnerf,constant,pixelnerf-3v", "--runs", runs) == 0
+    affnerf = json.loads((out / "metrics_affnerf.json").read_text())
+    pixelnerf = json.loads((out / "metrics_pixelnerf-3v.json").read_text())
+    assert affnerf["settings"]["input_views"] == "1" and pixelnerf["settings"]["input_views"] == "3"
+    assert pixelnerf["settings"]["run"] == str(trained_runs["pixelnerf"])
+    assert affnerf["settings"]["run"] == str(trained_runs["affnerf"])
+    # the same numbers as the baseline evaluated on its own, with --run and --input-views 3
+    alone = tmp_path / "alone"
+    assert _eval(trained_runs["pixelnerf"], train_dataset, alone, "pixelnerf", "--input-views", "3") == 0
+    by_itself = json.loads((alone / "metrics_pixelnerf-3v.json").read_text())
+    assert pixelnerf["mean"]["mIoU"] == pytest.approx(by_itself["mean"]["mIoU"], abs=1e-6)
+    table = (out / "table2.md").read_text()
+    assert "| pixelnerf-3v |" in table and "| affnerf |" in table
+    assert json.loads((out / "metrics.json").read_text())["method"] == "affnerf"
+
+
+@pytest.mark.parametrize(
+    ("method", "runs", "message"),
+    [
+        ("affnerf,pixelnerf-3v", "pixelnerf", "--runs 'pixelnerf': expected name=PATH"),
+        ("affnerf", "nerfacto=x", "unknown method 'nerfacto'"),
+        ("affnerf", "pixelnerf=/no/such/run", "--runs 'pixelnerf=/no/such/run': /no/such/run: no such file"),
+        ("affnerf,pixelnerf-3v", "PIX,pixelnerf=PIX", "--runs names pixelnerf twice"),
+        ("affnerf,affnerf-1v", "", "evaluates affnerf twice"),
+        ("affnerf,pixelnerf-0v", "", "at least 1 input view"),
+        ("affnerf,pixelnerf-3v", "", "method pixelnerf needs a run of kind pixelnerf, this run is of kind affnerf"),
+    ],
+)
+def test_bad_method_or_runs_lists_fail_before_anything_is_written(
+    method, runs, message, trained_runs, train_dataset, tmp_path, capsys
+):
+    runs = runs.replace("PIX,", f"pixelnerf={trained_runs['pixelnerf']},").replace(
+        "PIX", str(trained_runs["pixelnerf"])
+    )
+    out = tmp_path / "eval"
+    assert _eval(trained_runs["affnerf"], train_dataset, out, method, "--runs", runs) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not list(out.glob("metrics*.json"))
+
+
 def test_wrong_run_for_a_method_is_a_clear_error(trained_runs, train_dataset, tmp_path, capsys):
     assert _eval(trained_runs["pixelnerf"], train_dataset, tmp_path / "e", "affnerf") == 2
     assert "method affnerf needs a run of kind affnerf, this run is of kind pixelnerf" in capsys.readouterr().err

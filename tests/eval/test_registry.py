@@ -8,7 +8,14 @@ import affnerf.eval.methods  # noqa: F401  (registers the built-in methods)
 from affnerf.errors import AffnerfError
 from affnerf.eval import registry
 from affnerf.eval.methods.constant import ConstantMethod
-from affnerf.eval.registry import MethodContext, MethodSpec, method_names, parse_methods, register_method
+from affnerf.eval.registry import (
+    MethodContext,
+    MethodSpec,
+    method_names,
+    parse_method_views,
+    parse_methods,
+    register_method,
+)
 
 
 def test_builtin_methods_are_registered_in_order():
@@ -31,6 +38,20 @@ def test_all_leaves_out_the_constant_floor_and_the_fitted_affnerf():
     assert parse_methods("all") == everything
     assert parse_methods("semantic-ray,gsnerf") == ["semantic-ray", "gsnerf"]
     assert parse_methods(" retrieval , constant ") == ["retrieval", "constant"]
+
+
+def test_a_views_suffix_gives_a_method_its_own_input_views():
+    assert parse_method_views("affnerf, pixelnerf-3v,semantic-nerf-20v") == [
+        ("affnerf", None),
+        ("pixelnerf", 3),
+        ("semantic-nerf", 20),
+    ]
+    assert parse_methods("gsnerf-3v,retrieval") == ["gsnerf", "retrieval"]
+    assert parse_method_views("all") == [(name, None) for name in parse_methods("all")]
+    with pytest.raises(AffnerfError, match="unknown method 'nerfacto'"):
+        parse_method_views("nerfacto-3v")
+    with pytest.raises(AffnerfError, match="at least 1 input view"):
+        parse_method_views("pixelnerf-0v")
 
 
 def test_unknown_method_names_the_known_ones():

@@ -8,6 +8,7 @@ module in ``eval/methods/__init__.py``.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,11 +93,41 @@ def method_spec(name: str) -> MethodSpec:
     return _METHODS[name]
 
 
+_VIEWS_SUFFIX = re.compile(r"^(?P<name>.+)-(?P<views>[0-9]+)v$")
+
+
 def parse_methods(text: str) -> list[str]:
-    """Method names from ``a,b`` or ``all`` (every method with ``in_all``), each checked against the registry."""
+    """Method names from ``a,b`` or ``all`` (every method with ``in_all``), each checked against the registry (a
+    ``-<N>v`` suffix, see :func:`parse_method_views`, is dropped)."""
+    return [name for name, _ in parse_method_views(text)]
+
+
+def parse_method_views(text: str) -> list[tuple[str, int | None]]:
+    """Methods and the input views each is given, from ``a,b-3v`` or ``all``.
+
+    A name with a ``-<N>v`` suffix is that method given N input views, and its results are filed under that label
+    (``pixelnerf-3v``); a bare name is given the evaluation's ``--input-views`` (None here). ``all`` is every method
+    with ``in_all``, bare.
+
+    Example:
+        >>> import affnerf.eval.methods
+        >>> parse_method_views("affnerf, pixelnerf-3v")
+        [('affnerf', None), ('pixelnerf', 3)]
+
+    Raises:
+        AffnerfError: for an unknown name or a suffix of 0 views.
+    """
     if text.strip() == "all":
-        return [name for name, spec in _METHODS.items() if spec.in_all]
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    for name in names:
-        method_spec(name)
-    return names
+        return [(name, None) for name, spec in _METHODS.items() if spec.in_all]
+    return [_method_views(t.strip()) for t in text.split(",") if t.strip()]
+
+
+def _method_views(token: str) -> tuple[str, int | None]:
+    """One ``--method`` entry: a registered name as it is, else ``<name>-<N>v``."""
+    match = _VIEWS_SUFFIX.match(token)
+    if token in _METHODS or match is None:
+        return method_spec(token).name, None
+    views = int(match["views"])
+    if views < 1:
+        raise AffnerfError(f"--method {token!r}: a method is given at least 1 input view")
+    return method_spec(match["name"]).name, views
