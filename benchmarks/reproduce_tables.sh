@@ -15,7 +15,7 @@ DEVICE="${DEVICE:-cpu}"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
 STEPS="${STEPS:-34000}"           # AFF-NeRF, small configuration, all eight categories (81 min)
 NPROC="${NPROC:-2}"               # its processes (DistributedDataParallel, gloo on CPUs); 1 on a single GPU
-PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views), the full-protocol run (38 min)
+PIX_STEPS="${PIX_STEPS:-3000}"    # PixelNeRF-M baseline (3 input views), the full-protocol run (17.5 min on the AVX-512 VM)
 # the three posed baselines of the shared protocol, each 27 minutes of one core at most (their steps fill it)
 BASE_STEPS="${BASE_STEPS:-pixelnerf:4500 semantic-ray:2400 gsnerf:2300}"
 LOCO_STEPS="${LOCO_STEPS:-20000}"  # leave-one-category-out AFF-NeRF runs (48 min of one core, beside another run)
@@ -72,7 +72,7 @@ $A eval calibrate --run "$W/affnerf" --data "$W/data" --max-objects 32 --device 
 .venv/bin/python -m affnerf.predict.shipped "$W/affnerf" src/affnerf/weights/affnerf-small.pt
 
 # mesh levels of the other runs, each on its own training categories' validation objects
-for run in pixelnerf semantic-ray gsnerf; do
+for run in pixelnerf-full pixelnerf semantic-ray gsnerf; do
     $A eval calibrate --run "$W/$run" --data "$W/data" --input-views 3 --max-objects 4 --resolution 64 --device "$DEVICE"
 done
 for held in teapot scissors; do
