@@ -1,7 +1,8 @@
-"""How good can the decoder be with the best codes? (issue 12, results/code_oracle.md)
+"""How good can the decoder be with the best codes? (issue 12, results/code_oracle*.md)
 
-Every lever on the network's size and on the loss left the shipped model level (validation mIoU about 0.52 on the
-ladder's scorer). This separates the two halves of the model: for each object the codes are fitted, with the weights
+This separates the two halves of the model (results: ``code_oracle.md`` for the model of 2026-11-25, when every
+lever on the network's size and loss left it level, and ``code_oracle_shipped.md`` for the weights shipped since
+2026-12-05): for each object the codes are fitted, with the weights
 frozen, to K posed views of it (Adam on the shape and appearance codes, the training loss: colour MSE + λ CE on
 coarse and fine stages) and then scored at the protocol's target views, which the fit never sees, beside the
 encoder's codes from the one input view. If the fitted codes score far higher, the decoder can express the object
