@@ -113,7 +113,10 @@ def parse_runs(text: str) -> dict[str, Path]:
         name, sep, path = (part.strip() for part in entry.partition("="))
         if not sep or not name or not path:
             raise AffnerfError(f"--runs {entry!r}: expected name=PATH (e.g. pixelnerf=runs/pix)")
-        name = method_spec(name).name
+        try:
+            name = method_spec(name).name
+        except AffnerfError as err:
+            raise AffnerfError(f"--runs {entry!r}: {err}") from None
         if name in runs:
             raise AffnerfError(f"--runs names {name} twice")
         if not Path(path).exists():
@@ -185,10 +188,10 @@ def run_eval(config: EvalConfig) -> dict[str, dict[str, Any]]:
     protocol_config(config)  # settings checked before anything is loaded
     ds = Dataset.open(config.data)
     objects = _objects(ds, config, max(views for _, views in requests))
+    # every method is built (its run loaded and checked) before anything is written
+    methods = [build_method(name, config, ds, runs.get(name)) for name, _ in requests]
     out = Path(config.out)
     out.mkdir(parents=True, exist_ok=True)
-    # every method is built (its run loaded and checked) before the first is evaluated
-    methods = [build_method(name, config, ds, runs.get(name)) for name, _ in requests]
     results = {}
     for (name, views), method in zip(requests, methods, strict=True):
         label = method_label(name, views)
