@@ -144,3 +144,17 @@ def test_merged_settings_name_every_part_and_the_longest_time():
     merged = merge_settings(parts)
     assert merged == {"categories": "pen | bottle (2 processes side by side)", "seconds": 6.5, "scale": "0.5"}
     assert merge_settings([None, parts[0]]) is None and merge_settings([]) is None
+
+
+def test_methods_given_one_and_three_input_views_are_pictured_at_one_camera(objects):
+    objs, n = objects
+    one = evaluate(TrueMeshMethod(), objs, ProtocolConfig(1, 3, 0.25), "test", n, keep_examples=2)
+    three = evaluate(TrueMeshMethod(), objs, ProtocolConfig(3, 3, 0.25), "test", n, keep_examples=2)
+    assert len(one.examples) == len(three.examples) == 2
+    for a, b in zip(one.examples, three.examples, strict=True):
+        assert a["object_id"] == b["object_id"]
+        np.testing.assert_array_equal(a["input"], b["input"])
+        np.testing.assert_array_equal(a["gt_labels"], b["gt_labels"])
+        shown, truth = a["labels"] > 0, a["gt_labels"] > 0  # the prediction shown is at that camera too
+        assert (shown & truth).sum() / (shown | truth).sum() > 0.7
+        assert a["gt_labels"].any()  # the object is in view

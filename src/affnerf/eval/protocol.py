@@ -300,16 +300,38 @@ def stability_record(
     return StabilityRecord(obj.record.object_id, obj.record.category, sets, mious, fscores)
 
 
-def _example(obj: ObjectData, inputs: list[int], gt: np.ndarray, gt_rgb: np.ndarray, pred: Prediction) -> dict:
-    """One object's first target (input, ground truth, prediction) for the figure."""
+def example_views(num_frames: int, object_id: str, config: ProtocolConfig, targets: list[int]) -> tuple[int, int]:
+    """The figure's input frame and the index into ``targets`` of its shown target, the same for every method.
+
+    The input is the first frame of the seeded order (an input of every method); the target is the frame at
+    position ``target_views`` of that order, a target of every method given at most ``target_views`` inputs, so
+    methods with 1 and 3 input views are shown at one camera. With more inputs than that, the first target.
+
+    Example:
+        >>> config = ProtocolConfig(input_views=1, target_views=5)
+        >>> _, one = choose_views(30, "pen_0001", config)
+        >>> _, three = choose_views(30, "pen_0001", ProtocolConfig(input_views=3, target_views=5))
+        >>> a, i = example_views(30, "pen_0001", config, one)
+        >>> b, j = example_views(30, "pen_0001", ProtocolConfig(input_views=3, target_views=5), three)
+        >>> a == b and one[i] == three[j]
+        True
+    """
+    order = view_order(num_frames, object_id, config.seed)
+    shown = order[config.target_views] if config.target_views < len(order) else -1
+    return order[0], targets.index(shown) if shown in targets else 0
+
+
+def _example(obj: ObjectData, views: tuple[int, int], gt: np.ndarray, gt_rgb: np.ndarray, pred: Prediction) -> dict:
+    """One object's picture for the figure (input, ground truth, prediction) at ``views`` (:func:`example_views`)."""
+    frame, k = views
     size = (gt.shape[2], gt.shape[1])
     return {
         "object_id": obj.record.object_id,
-        "input": resized(obj.rgb(inputs[0]), size, nearest=False),
-        "gt_rgb": gt_rgb[0],
-        "gt_labels": gt[0],
-        "labels": pred.labels[0],
-        "rgb": None if pred.rgb is None else pred.rgb[0],
+        "input": resized(obj.rgb(frame), size, nearest=False),
+        "gt_rgb": gt_rgb[k],
+        "gt_labels": gt[k],
+        "labels": pred.labels[k],
+        "rgb": None if pred.rgb is None else pred.rgb[k],
     }
 
 
@@ -329,7 +351,8 @@ def evaluate(
         config: view choice, resolution, 3D metrics and view stability.
         split: name recorded in the result.
         num_classes: affordance classes including background.
-        keep_examples: keep this many objects' first target (input, ground truth, prediction) for figures.
+        keep_examples: keep this many objects' pictures (input, ground truth, prediction; :func:`example_views`)
+            for figures.
     """
     result = EvalResult(method.name, split, num_classes, metrics_3d=config.metrics_3d)
     result.stability_views = config.stability_views
@@ -347,5 +370,6 @@ def evaluate(
             record = stability_record(method, obj, config, target_set, gt, num_classes, (pred, score), truth)
             result.stability.append(record)
         if len(result.examples) < keep_examples:
-            result.examples.append(_example(obj, inputs, gt, gt_rgb, pred))
+            views = example_views(len(obj), obj.record.object_id, config, targets)
+            result.examples.append(_example(obj, views, gt, gt_rgb, pred))
     return result
