@@ -41,13 +41,11 @@ def clipped_share(rgb: np.ndarray, mask: np.ndarray) -> float:
 def score_object(predictor: Predictor, obj: Any, tmp: Path) -> dict[str, Any]:
     """The object's clean and overexposed mIoU and the overexposed photo's clipped share."""
     case = lighting_case(obj, ProtocolConfig(1, 5, seed=0))
-    view, _, rng, _, mask = case
     row: dict[str, Any] = {"object": obj.record.object_id}
     for name in ("clean", BRIGHT):
-        image = CONDITIONS[name](obj.rgb(view), rng)
-        scores = score_lit_photo(predictor, obj, image, case, tmp, 30)
-        row["clean" if name == "clean" else "bright"] = scores["miou"]
-        row["clipped_share"] = clipped_share(image, mask)
+        image = CONDITIONS[name](obj.rgb(case.view), case.rng)
+        row["clean" if name == "clean" else "bright"] = score_lit_photo(predictor, obj, image, case, tmp, 30)["miou"]
+    row["clipped_share"] = clipped_share(image, case.mask)  # of the overexposed photo, the last drawn
     return row
 
 

@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from PIL import Image, ImageFilter
@@ -82,22 +82,31 @@ CONDITIONS = {
 }
 
 
-def lighting_case(obj: Any, protocol: ProtocolConfig) -> tuple[int, list[int], np.random.Generator, Any, np.ndarray]:
-    """An object's input view, target views, random source of the changes, 3D truth and (H, W) true mask."""
+class LightingCase(NamedTuple):
+    """One object's set-up for the lighting changes (:func:`lighting_case`)."""
+
+    view: int  # the input view
+    targets: list[int]  # the scored views
+    rng: np.random.Generator  # random source of the changes
+    truth: Any  # the object's 3D truth, sampled once for every condition
+    mask: np.ndarray  # (H, W) bool true object mask of the input view
+
+
+def lighting_case(obj: Any, protocol: ProtocolConfig) -> LightingCase:
+    """An object's input view, target views, random source of the changes, 3D truth and true mask."""
     (view,), targets = choose_views(len(obj), obj.record.object_id, protocol)
     rng = np.random.default_rng(sample_seed(0, obj.record.object_id))
-    return view, targets, rng, true_samples(obj, 0), obj.affordance(view) > 0
+    return LightingCase(view, targets, rng, true_samples(obj, 0), obj.affordance(view) > 0)
 
 
 def score_lit_photo(
-    predictor: Predictor, obj: Any, image: np.ndarray, case: tuple, tmp: Path, fit_steps: int
+    predictor: Predictor, obj: Any, image: np.ndarray, case: LightingCase, tmp: Path, fit_steps: int
 ) -> dict[str, float]:
     """Predict the changed (H, W, 3) ``image`` with the ``case``'s true mask as its alpha (lighting only, not
-    separation), as ``predict`` does, and score it at the case's target views (:func:`lighting_case`)."""
-    _, targets, _, truth, mask = case
+    separation), as ``predict`` does, and score it at the case's target views."""
     photo = tmp / "photo.png"
-    Image.fromarray(np.dstack([image, mask.astype(np.uint8) * 255])).save(photo)
-    return score_photo(predictor, obj, photo, targets, fit_steps, truth)
+    Image.fromarray(np.dstack([image, case.mask.astype(np.uint8) * 255])).save(photo)
+    return score_photo(predictor, obj, photo, case.targets, fit_steps, case.truth)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -111,9 +120,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             for entry in ds.objects("test", category)[: args.objects]:
                 obj = ds.load_object(entry)
                 case = lighting_case(obj, protocol)  # the 3D truth once per object, for every condition
-                view, _, rng, _, _ = case
                 for name, change in CONDITIONS.items():
-                    image = change(obj.rgb(view), rng)
+                    image = change(obj.rgb(case.view), case.rng)
                     scores = score_lit_photo(predictor, obj, image, case, Path(tmp), args.fit_steps)
                     rows.append({"object": obj.record.object_id, "category": category, "condition": name, **scores})
                     print(
