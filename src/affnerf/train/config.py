@@ -33,6 +33,10 @@ class OptimConfig:
         ema_decay: keep an exponential moving average of the weights with this decay per step (0 = none; e.g.
             0.999 averages about the last thousand steps; :mod:`affnerf.train.ema`). Checkpoints then hold it
             beside the weights, and predict, eval and ``--init-from`` use it.
+        weight_decay: decoupled weight decay (AdamW) on the image encoders' convolution and linear weights, the
+            part of the model that fits its training objects better than new ones (benchmarks/results/
+            code_oracle_shipped.md); the field, biases and normalisation scales never decay. 0 = plain Adam, the
+            presets' (benchmarks/results/weight_decay.md).
     """
 
     lr: float = 5e-4
@@ -41,6 +45,7 @@ class OptimConfig:
     warmup_steps: int = 0
     grad_clip: float = 0.0
     ema_decay: float = 0.0
+    weight_decay: float = 0.0
 
 
 @dataclass(frozen=True)

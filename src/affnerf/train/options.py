@@ -40,6 +40,8 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
     if not 0.0 <= config.optim.ema_decay < 1.0:
         raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
+    if config.optim.weight_decay < 0:
+        raise AffnerfError(f"--optim.weight-decay is 0 (none) or positive, not {config.optim.weight_decay}")
     shares = (config.foreground_fraction, config.outline_fraction)
     if min(shares) < 0 or sum(shares) > 1 or config.outline_radius < 0:
         raise AffnerfError(

@@ -223,7 +223,7 @@ class Trainer:
         config, ctx = self.config, self.ctx
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
-        optimizer = make_optimizer(model, config.optim.lr, ctx.device)
+        optimizer = make_optimizer(model, config.optim.lr, ctx.device, config.optim.weight_decay)
         sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world)
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
