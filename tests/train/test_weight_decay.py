@@ -50,6 +50,15 @@ def test_a_negative_decay_is_one_clear_line(tiny_train_config, capsys):
     assert not (config.out / "checkpoints").exists()
 
 
+def test_a_model_without_image_encoders_refuses_the_decay_in_one_line(tiny_train_config, capsys):
+    config = tiny_train_config()
+    argv = train_argv(config, "--optim.weight-decay", "0.1", "--model.kind", "pixelnerf", "--input-views", "3")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--optim.weight-decay decays the image encoders of affnerf, pose-aware models; a pixelnerf model" in err
+    assert not (config.out / "checkpoints").exists()
+
+
 def test_a_decaying_run_resumes_to_the_same_weights(tiny_train_config, tmp_path):
     config = tiny_train_config(optim=replace(tiny_train_config().optim, weight_decay=0.2))
     train(config)

@@ -11,6 +11,9 @@ from collections.abc import Mapping
 from affnerf.errors import AffnerfError
 from affnerf.train.config import TrainConfig
 
+#: model kinds with image encoders (parameters named ``*encoder*``) for ``--optim.weight-decay`` to decay.
+ENCODER_KINDS = ("affnerf", "pose-aware")
+
 __all__ = ["check_options", "check_surface_samples", "refuse_negative"]
 
 
@@ -42,6 +45,11 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
     if config.optim.weight_decay < 0:
         raise AffnerfError(f"--optim.weight-decay is 0 (none) or positive, not {config.optim.weight_decay}")
+    if config.optim.weight_decay > 0 and config.model.kind not in ENCODER_KINDS:
+        raise AffnerfError(
+            f"--optim.weight-decay decays the image encoders of {', '.join(ENCODER_KINDS)} models;"
+            f" a {config.model.kind} model has none"
+        )
     shares = (config.foreground_fraction, config.outline_fraction)
     if min(shares) < 0 or sum(shares) > 1 or config.outline_radius < 0:
         raise AffnerfError(
