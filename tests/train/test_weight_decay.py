@@ -40,7 +40,8 @@ def test_a_step_with_no_gradient_shrinks_encoder_weights_by_lr_times_decay_and_n
         shrunk = "encoder" in name and p.ndim >= 2
         expected = before[name] * (1 - 0.01 * 0.5) if shrunk else before[name]
         torch.testing.assert_close(p.detach(), expected, rtol=1e-6, atol=1e-7)
-    assert isinstance(make_optimizer(model, 0.01, torch.device("cpu")), torch.optim.Adam)
+    plain = make_optimizer(model, 0.01, torch.device("cpu"))  # no decay: Adam itself (AdamW subclasses it), one group
+    assert type(plain) is torch.optim.Adam and len(plain.param_groups) == 1
 
 
 def test_a_negative_decay_is_one_clear_line(tiny_train_config, capsys):
