@@ -72,6 +72,12 @@ def target_labels(method: ConditionedNeRFMethod, codes: Codes, obj: ObjectData, 
     return np.stack([v.labels for v in views]), gt
 
 
+def category_mious(cats: dict[str, np.ndarray]) -> dict:
+    """Per-category (C, C) confusion matrices -> {"mIoU": the mean over categories, "per_category": each one's}."""
+    per = {c: segmentation_metrics(m)["mIoU"] for c, m in sorted(cats.items())}
+    return {"mIoU": float(np.mean(list(per.values()))), "per_category": per}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, required=True)
@@ -111,12 +117,11 @@ def main() -> None:
         print(entry.id, f"{time.perf_counter() - start:.0f} s", flush=True)
     result = {"settings": {k: str(v) for k, v in vars(args).items()}, "seconds": time.perf_counter() - start}
     for name, cats in conf.items():
-        per = {c: segmentation_metrics(m)["mIoU"] for c, m in sorted(cats.items())}
         result[name] = {
-            "mIoU": float(np.mean(list(per.values()))),
-            "per_category": per,
+            **category_mious(cats),
             "IoU_per_class": {c: per_class_scores(m)["IoU_per_class"] for c, m in sorted(cats.items())},
         }
+        per = result[name]["per_category"]
         print(name, round(result[name]["mIoU"], 3), {c: round(v, 3) for c, v in per.items()})
     args.out.write_text(json.dumps(result, indent=1))
 

@@ -38,15 +38,16 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from code_oracle import target_labels  # a sibling script: benchmarks/ is on the path when this one runs
+from code_oracle import category_mious, target_labels  # a sibling script: benchmarks/ is on the path
 
 from affnerf.data.dataset import Dataset, interleave_categories
 from affnerf.eval.methods.affnerf import ConditionedNeRFMethod
 from affnerf.eval.protocol import ProtocolConfig, choose_views
-from affnerf.metrics.segmentation import confusion_matrix, segmentation_metrics
+from affnerf.metrics.segmentation import confusion_matrix
 from affnerf.model.affnerf import Codes
 from affnerf.predict.loading import load_model
 from affnerf.train import distributed as dist_utils
+from affnerf.train.checkpoint import load_checkpoint
 from affnerf.train.config import TrainConfig, config_from_json
 from affnerf.train.sampler import encoder_crops
 from affnerf.train.schedule import learning_rate
@@ -74,6 +75,15 @@ class CodeTable(torch.nn.Module):
         return {"ids": self.ids, "shape": self.shape.weight.detach(), "appearance": self.appearance.weight.detach()}
 
 
+def load_table(path: Path, prefix: str = "") -> tuple[CodeTable, Codes]:
+    """The fitted table written by ``fit`` (frozen), or with ``prefix`` ``start_`` the codes it started from, and
+    each code's (D,) spread over the table's objects."""
+    saved = torch.load(path, weights_only=False)
+    shape, appearance = saved[prefix + "shape"], saved[prefix + "appearance"]
+    table = CodeTable(saved["ids"], shape, appearance).requires_grad_(False)
+    return table, Codes(shape.std(0), appearance.std(0))
+
+
 class TablePass(torch.nn.Module):
     """The trainer's forward pass with each object's codes read from the table instead of encoded."""
 
@@ -91,8 +101,7 @@ class TablePass(torch.nn.Module):
 
 def stage_config(args: argparse.Namespace, lr: float, lr_final: float) -> TrainConfig:
     """The checkpoint's own training config, pointed at this run's data, cache, folder, steps and rates."""
-    data = torch.load(args.checkpoint, map_location="cpu", weights_only=False)
-    config = config_from_json(data["train_config"], args.checkpoint)
+    config = config_from_json(load_checkpoint(args.checkpoint)["train_config"], args.checkpoint)
     optim = dataclasses.replace(config.optim, lr=lr, lr_final=lr_final, grad_clip=0.0, ema_decay=0.0)
     return dataclasses.replace(
         config,
@@ -115,6 +124,7 @@ def stage_config(args: argparse.Namespace, lr: float, lr_final: float) -> TrainC
 
 
 def make_trainer(config: TrainConfig) -> Trainer:
+    """A single-process trainer set up for ``config`` (its data cached, the checkpoint's weights loaded)."""
     trainer = Trainer(config, dist_utils.setup("cpu"))
     trainer.setup()
     return trainer
@@ -160,14 +170,15 @@ def fit(args: argparse.Namespace) -> dict:
     table = CodeTable([f.object_id for f in frames], start.shape, start.appearance)
     trainer.net = TablePass(model, table)
     trainer.state.optimizer = torch.optim.SparseAdam(list(table.parameters()), lr=args.lr)
-
-    def step_fn(step: int) -> float:
-        return trainer.train_iteration(step)["loss/total"]
-
-    record = run_steps(trainer, step_fn, args.steps, args.minutes)
+    record = run_steps(trainer, training_loss(trainer), args.steps, args.minutes)
     args.codes.parent.mkdir(parents=True, exist_ok=True)
     torch.save({**table.payload(), "start_shape": start.shape, "start_appearance": start.appearance}, args.codes)
     return record
+
+
+def training_loss(trainer: Trainer):
+    """A step of ``trainer``'s own iteration (its batch, loss and optimiser), returning the step's total loss."""
+    return lambda step: trainer.train_iteration(step)["loss/total"]
 
 
 def code_gap(codes: Codes, target: Codes, spread: Codes) -> torch.Tensor:
@@ -193,9 +204,7 @@ def distil(args: argparse.Namespace) -> dict:
     """Train the encoders to regress the table's codes; the decoder frozen, nothing rendered."""
     trainer, optimizer = encoder_stage(args)
     model, sampler = trainer.state.model, trainer.state.sampler
-    saved = torch.load(args.codes, weights_only=False)
-    table = CodeTable(saved["ids"], saved["shape"], saved["appearance"]).requires_grad_(False)
-    spread = Codes(saved["shape"].std(0), saved["appearance"].std(0))
+    table, spread = load_table(args.codes)
 
     def step_fn(step: int) -> float:
         for group in optimizer.param_groups:
@@ -220,11 +229,7 @@ def encoders_control(args: argparse.Namespace) -> dict:
     trainer, _ = encoder_stage(args)
     if args.distil_weight > 0:
         add_distil_term(trainer, args.codes, args.distil_weight)
-
-    def step_fn(step: int) -> float:
-        return trainer.train_iteration(step)["loss/total"]
-
-    record = run_steps(trainer, step_fn, args.steps, args.minutes)
+    record = run_steps(trainer, training_loss(trainer), args.steps, args.minutes)
     trainer.save_checkpoint(trainer.step)
     return record
 
@@ -233,9 +238,7 @@ def add_distil_term(trainer: Trainer, codes_path: Path, weight: float) -> None:
     """Make ``trainer``'s loss also pull the step's encoded codes towards the table's (``weight`` x
     :func:`code_gap`): the encoding is kept as the model makes it, and the loss reads it."""
     model = trainer.state.model
-    saved = torch.load(codes_path, weights_only=False)
-    table = CodeTable(saved["ids"], saved["shape"], saved["appearance"]).requires_grad_(False)
-    spread = Codes(saved["shape"].std(0), saved["appearance"].std(0))
+    table, spread = load_table(codes_path)
     kept: list[Codes] = []
     encode_views, loss = model.encode_views, trainer._loss
 
@@ -259,28 +262,25 @@ def check(args: argparse.Namespace) -> dict:
     loaded = load_model(args.checkpoint, "cpu")
     loaded.model.eval()
     method, dataset = ConditionedNeRFMethod(loaded), Dataset.open(args.data)
-    saved = torch.load(args.codes, weights_only=False)
-    row = {object_id: i for i, object_id in enumerate(saved["ids"])}
+    table, start = load_table(args.codes)[0], load_table(args.codes, "start_")[0]
     protocol, n = ProtocolConfig(target_views=5, scale=0.25), len(dataset.affordance_classes)
     conf: dict[str, dict[str, np.ndarray]] = {"encoder": {}, "table": {}, "table_start": {}}
     for entry in interleave_categories(dataset.objects("train"), args.per_category):
-        obj, i = dataset.load_object(entry), row[entry.id]
+        obj = dataset.load_object(entry)
         inputs, targets = choose_views(len(obj), entry.id, protocol)
         with torch.no_grad():
             codes = {
                 "encoder": method.encode(obj, inputs),
-                "table": Codes(saved["shape"][i : i + 1], saved["appearance"][i : i + 1]),
-                "table_start": Codes(saved["start_shape"][i : i + 1], saved["start_appearance"][i : i + 1]),
+                "table": table([entry.id]),
+                "table_start": start([entry.id]),
             }
         for name, c in codes.items():
             pred, gt = target_labels(method, c, obj, targets, protocol.scale)
             conf[name].setdefault(entry.category, np.zeros((n, n), np.int64))
             conf[name][entry.category] += confusion_matrix(gt, pred, n)
-    result = {}
-    for name, cats in conf.items():
-        per = {c: segmentation_metrics(m)["mIoU"] for c, m in sorted(cats.items())}
-        result[name] = {"mIoU": float(np.mean(list(per.values()))), "per_category": per}
-        print(name, round(result[name]["mIoU"], 3), {c: round(v, 3) for c, v in per.items()}, flush=True)
+    result = {name: category_mious(cats) for name, cats in conf.items()}
+    for name, scores in result.items():
+        print(name, round(scores["mIoU"], 3), {c: round(v, 3) for c, v in scores["per_category"].items()}, flush=True)
     return result
 
 
