@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 
@@ -18,10 +18,13 @@ __all__ = ["AffNeRF", "Codes", "LabelledCodes", "RayOutputs"]
 
 @dataclass
 class Codes:
-    """Shape and appearance codes of B objects, each (B, code_dim)."""
+    """Shape and appearance codes of B objects, each (B, code_dim); while training a model with
+    ``code_kl_weight``, ``kl`` (B,): each object's KL divergence of its codes' Gaussians from the prior
+    (:func:`gaussian_kl`, both codes summed), else None."""
 
     shape: torch.Tensor
     appearance: torch.Tensor
+    kl: torch.Tensor | None = field(default=None, kw_only=True)
 
 
 @dataclass
@@ -39,6 +42,32 @@ def noisy_codes(codes: torch.Tensor, scale: float) -> torch.Tensor:
     if scale <= 0 or codes.shape[0] < 2:
         return codes
     return codes + scale * codes.detach().std(dim=0, keepdim=True) * torch.randn_like(codes)
+
+
+def gaussian_kl(mean: torch.Tensor, log_var: torch.Tensor) -> torch.Tensor:
+    """KL divergence of N(mean, exp(log_var)) from N(0, I), summed over the code's dimensions: (B, D) -> (B,).
+
+    Example:
+        >>> gaussian_kl(torch.zeros(1, 4), torch.zeros(1, 4)).tolist()
+        [0.0]
+    """
+    return 0.5 * (mean.square() + log_var.exp() - 1.0 - log_var).sum(dim=-1)
+
+
+def sampled_codes(mean: torch.Tensor, log_var: torch.Tensor) -> torch.Tensor:
+    """(B, D) codes drawn from N(mean, exp(log_var)) by the reparameterisation trick (gradients reach both), the
+    log-variance clamped to [-12, 4] so a diverging head cannot blow the code up. Draws from torch's global
+    generator (saved in checkpoints)."""
+    return mean + torch.randn_like(mean) * (0.5 * log_var.clamp(-12.0, 4.0)).exp()
+
+
+def variational_codes(
+    codes: tuple[torch.Tensor, torch.Tensor], log_vars: tuple[torch.Tensor, torch.Tensor]
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Shape and appearance means and log-variances, (B, D) each -> the two sampled codes (:func:`sampled_codes`)
+    and each object's KL summed over both codes, (B,)."""
+    kl = gaussian_kl(codes[0], log_vars[0].clamp(-12.0, 4.0)) + gaussian_kl(codes[1], log_vars[1].clamp(-12.0, 4.0))
+    return sampled_codes(codes[0], log_vars[0]), sampled_codes(codes[1], log_vars[1]), kl
 
 
 class AffNeRF(ConditionedNeRF):
@@ -60,10 +89,18 @@ class AffNeRF(ConditionedNeRF):
         super().__init__(config, num_classes)
         label_classes = num_classes if config.view_affordance_weight > 0 else 0
         one = config.encoders == "one"
+        variational = config.code_kl_weight > 0
         self.shape_encoder = CodeEncoder(
-            config.code_dim, config.encoder_width, label_classes, second_code=one, pooling=config.shape_pooling
+            config.code_dim,
+            config.encoder_width,
+            label_classes,
+            second_code=one,
+            pooling=config.shape_pooling,
+            variational=variational,
         )
-        self.appearance_encoder = None if one else CodeEncoder(config.code_dim, config.encoder_width)
+        self.appearance_encoder = (
+            None if one else CodeEncoder(config.code_dim, config.encoder_width, variational=variational)
+        )
         self.planes: PlaneGenerator | None = None
         trunk_dim = config.code_dim
         if config.conditioning == "triplane":
@@ -75,17 +112,26 @@ class AffNeRF(ConditionedNeRF):
     def encode(self, images: torch.Tensor) -> Codes:
         """(B, 3, S, S) object crops in [0, 1] -> their codes; while training a model with a pixel-labelling head,
         :class:`LabelledCodes` with the crops' (B, C, S / 4, S / 4) logits; while training with ``code_noise``,
-        the codes with noise added (:func:`noisy_codes`)."""
-        shape, appearance, logits = self.shape_encoder.encode_both(images, labels=self.training)
+        the codes with noise added (:func:`noisy_codes`); while training with ``code_kl_weight``, codes drawn from
+        the encoders' Gaussians, with their KL (:func:`variational_codes`). Outside training, the means."""
+        out = self.shape_encoder.encode_gaussian(images, labels=self.training)
+        shape, appearance, logits, log_vars = out.code, out.second, out.logits, (out.code_log_var, out.second_log_var)
         if self.appearance_encoder is not None:
-            appearance = self.appearance_encoder(images)
+            second = self.appearance_encoder.encode_gaussian(images, labels=False)
+            appearance, log_vars = second.code, (out.code_log_var, second.code_log_var)
         assert appearance is not None  # one encoder gives both codes
+        kl = None
+        if self.training and self.config.code_kl_weight > 0:
+            assert log_vars[0] is not None and log_vars[1] is not None  # the heads exist with the weight
+            shape, appearance, kl = variational_codes((shape, appearance), (log_vars[0], log_vars[1]))
         if self.training and self.config.code_noise > 0:
             shape, appearance = (
                 noisy_codes(shape, self.config.code_noise),
                 noisy_codes(appearance, self.config.code_noise),
             )
-        return Codes(shape, appearance) if logits is None else LabelledCodes(shape, appearance, logits)
+        if logits is None:
+            return Codes(shape, appearance, kl=kl)
+        return LabelledCodes(shape, appearance, logits, kl=kl)
 
     def encode_views(self, images: torch.Tensor, intrinsics: torch.Tensor, poses: torch.Tensor) -> Codes:
         """Codes of B objects from V views each (B, V, 3, S, S): the mean of the views' codes (with the views'
@@ -96,19 +142,25 @@ class AffNeRF(ConditionedNeRF):
         b, v = images.shape[:2]
         codes = self.encode(images.reshape(b * v, *images.shape[2:]))
         shape, appearance = codes.shape.reshape(b, v, -1).mean(1), codes.appearance.reshape(b, v, -1).mean(1)
+        kl = None if codes.kl is None else codes.kl.reshape(b, v).mean(1)
         if not isinstance(codes, LabelledCodes):
-            return Codes(shape, appearance)
-        return LabelledCodes(shape, appearance, codes.view_logits.reshape(b, v, *codes.view_logits.shape[1:]))
+            return Codes(shape, appearance, kl=kl)
+        logits = codes.view_logits.reshape(b, v, *codes.view_logits.shape[1:])
+        return LabelledCodes(shape, appearance, logits, kl=kl)
 
     def auxiliary_losses(
         self, encoding: Codes, input_depth: torch.Tensor | None = None, input_labels: torch.Tensor | None = None
     ) -> dict[str, torch.Tensor]:
         """``loss/view_affordance``: ``view_affordance_weight`` x the cross-entropy of the shape encoder's pixel
-        labels (:func:`view_label_loss`) against ``input_labels`` (empty without the head or the labels)."""
-        if not isinstance(encoding, LabelledCodes) or input_labels is None or not input_labels.numel():
-            return {}
-        loss = view_label_loss(encoding.view_logits, input_labels)
-        return {"loss/view_affordance": self.config.view_affordance_weight * loss}
+        labels (:func:`view_label_loss`) against ``input_labels`` (absent without the head or the labels);
+        ``loss/code_kl``: ``code_kl_weight`` x the objects' mean KL of their codes (absent without it)."""
+        losses = {}
+        if encoding.kl is not None:
+            losses["loss/code_kl"] = self.config.code_kl_weight * encoding.kl.mean()
+        if isinstance(encoding, LabelledCodes) and input_labels is not None and input_labels.numel():
+            loss = view_label_loss(encoding.view_logits, input_labels)
+            losses["loss/view_affordance"] = self.config.view_affordance_weight * loss
+        return losses
 
     def condition(self, encoding: Codes, ray_object: torch.Tensor) -> Condition:
         """Each point takes its object's shape code (trunk) and appearance code (colour head).

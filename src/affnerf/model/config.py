@@ -93,6 +93,13 @@ class ModelConfig:
             deviation this times the spread (standard deviation) of that code dimension over the step's objects
             (0 = none, the paper). Beyond the paper: the decoder learns to give a plausible object for codes near
             the training objects' ones, as an encoder's code for a new object is (a denoising regulariser).
+        code_kl_weight: AFF-NeRF only: > 0 makes the codes variational, beyond the paper. Each encoder also gives
+            a log-variance per code dimension; training draws each code from that Gaussian around the encoder's
+            code (the reparameterisation trick) and adds this weight times the KL divergence of the two Gaussians
+            from N(0, I), summed over dimensions and averaged over objects (``loss/code_kl``), as a VAE's prior
+            does: the code space stays smooth and centred, and the decoder learns which dimensions it may trust.
+            The variances start small (:data:`affnerf.model.resnet.INITIAL_LOG_VARIANCE`).
+            Prediction, evaluation and the fit use the mean. 0 = plain codes (the paper).
         crop_outside: what the encoders' crop shows where it leaves the image (an object near or cut off by the
             frame's edge): ``background`` (the paper's crop: the background colour, so a cut-off object looks like
             a whole one with a straight side) or ``checker``, beyond the paper: a black and white checkerboard
@@ -133,6 +140,7 @@ class ModelConfig:
     encoders: Literal["two", "one"] = "two"
     shape_pooling: Literal["mean", "keypoints"] = "mean"
     code_noise: float = 0.0
+    code_kl_weight: float = 0.0
     crop_outside: Literal["background", "checker"] = "background"
 
 

@@ -49,7 +49,7 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
             ``shape_pooling`` other than ``mean`` or a ``code_noise`` of another kind than ``affnerf`` (only
             AFF-NeRF's shape code can be decoded into planes, only its encoder labels pixels or pools into
             keypoints, only it has the two encoders that ``one`` merges and the two global codes the noise is added
-            to), or a negative ``code_noise``.
+            to), or a negative ``code_noise``; a ``code_kl_weight`` for another kind, or below zero.
     """
     if config.kind not in MODEL_KINDS:
         raise ValueError(f"unknown model kind {config.kind!r} (known: {', '.join(MODEL_KINDS)})")
@@ -63,6 +63,10 @@ def build_model(config: ModelConfig, num_classes: int) -> ConditionedNeRF:
         raise AffnerfError(f"--model.code-noise is a share of the codes' spread (>= 0), not {config.code_noise}")
     if config.code_noise > 0 and config.kind != "affnerf":
         raise AffnerfError(f"--model.code-noise perturbs AFF-NeRF's two global codes; a {config.kind} model has none")
+    if config.code_kl_weight < 0:
+        raise AffnerfError(f"--model.code-kl-weight weighs a KL divergence (>= 0), not {config.code_kl_weight}")
+    if config.code_kl_weight > 0 and config.kind != "affnerf":
+        raise AffnerfError(f"--model.code-kl-weight makes AFF-NeRF's codes variational; a {config.kind} model has none")
     if config.shape_pooling != "mean" and config.kind != "affnerf":
         raise AffnerfError(f"--model.shape-pooling pools AFF-NeRF's shape encoder; a {config.kind} model has none")
     return MODEL_KINDS[config.kind](config, num_classes)

@@ -8,6 +8,8 @@ of many, in training and at prediction.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from torch import nn
 
@@ -81,6 +83,26 @@ def stacked_features(feats: list[torch.Tensor]) -> torch.Tensor:
     return torch.cat(resized, dim=1)
 
 
+@dataclass
+class EncoderOutput:
+    """What :meth:`CodeEncoder.encode_gaussian` gives for B images: the code (B, D); the second code (B, D) or
+    None; pixel logits (B, C, H / 4, W / 4) or None; the codes' log-variances (B, D) or None without
+    ``variational`` heads (the second's also None without a second code)."""
+
+    code: torch.Tensor
+    second: torch.Tensor | None
+    logits: torch.Tensor | None
+    code_log_var: torch.Tensor | None
+    second_log_var: torch.Tensor | None
+
+
+#: Bias the log-variance heads of a ``variational`` :class:`CodeEncoder` start from: a standard deviation of about
+#: 0.05, so training starts close to plain codes and the KL term widens them only as far as the rendering losses
+#: allow (a variance of 1 from the first step drowns the untrained codes in noise and the decoder learns to
+#: ignore them, a VAE's posterior collapse).
+INITIAL_LOG_VARIANCE = -6.0
+
+
 #: Stages (0-based) whose feature maps give keypoints in :class:`CodeEncoder`'s ``keypoints`` pooling: the second
 #: and third (H / 8 and H / 16: 8 x 8 and 4 x 4 cells of a 64-pixel crop).
 KEYPOINT_STAGES = (1, 2)
@@ -117,6 +139,9 @@ class CodeEncoder(nn.Module):
         pooling: ``mean`` (the paper: the last stage averaged over the image) or ``keypoints`` (beyond the paper:
             also the :func:`spatial_soft_argmax` of every channel of the :data:`KEYPOINT_STAGES`, where in the
             crop each feature peaks, which the average forgets).
+        variational: also give each code's log-variance per dimension from the same pooled features (a linear
+            layer per code, ``log_var_head`` / ``second_log_var_head``): the code becomes the mean of a Gaussian
+            (:meth:`encode_gaussian`), as a VAE's encoder gives.
     """
 
     def __init__(
@@ -126,6 +151,7 @@ class CodeEncoder(nn.Module):
         label_classes: int = 0,
         second_code: bool = False,
         pooling: str = "mean",
+        variational: bool = False,
     ) -> None:
         super().__init__()
         if pooling not in ("mean", "keypoints"):
@@ -137,6 +163,11 @@ class CodeEncoder(nn.Module):
             pooled += 2 * sum(self.backbone.channels[i] for i in KEYPOINT_STAGES)
         self.head = nn.Linear(pooled, code_dim)
         self.second_head = nn.Linear(pooled, code_dim) if second_code else None
+        self.log_var_head = nn.Linear(pooled, code_dim) if variational else None
+        self.second_log_var_head = nn.Linear(pooled, code_dim) if variational and second_code else None
+        for layer in (self.log_var_head, self.second_log_var_head):
+            if layer is not None:
+                nn.init.constant_(layer.bias, INITIAL_LOG_VARIANCE)
         self.label_head = nn.Conv2d(sum(self.backbone.channels), label_classes, 1) if label_classes else None
 
     def forward(self, images: torch.Tensor) -> torch.Tensor:
@@ -160,9 +191,23 @@ class CodeEncoder(nn.Module):
         self, images: torch.Tensor, labels: bool = True
     ) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor | None]:
         """As :meth:`encode`, with the second code (B, code_dim) between them (None without ``second_code``)."""
+        out = self.encode_gaussian(images, labels)
+        return out.code, out.second, out.logits
+
+    def encode_gaussian(self, images: torch.Tensor, labels: bool = True) -> EncoderOutput:
+        """(B, 3, H, W) images in [0, 1] -> :class:`EncoderOutput`: the code(s), (B, code_dim) each, their
+        log-variances with ``variational`` heads (else None) and, as :meth:`encode`, the pixel logits."""
         feats = self.backbone(images)
         pooled = self.pool(feats)
-        second = None if self.second_head is None else self.second_head(pooled)
-        if not labels or self.label_head is None:
-            return self.head(pooled), second, None
-        return self.head(pooled), second, self.label_head(stacked_features(feats))
+
+        def head(layer: nn.Linear | None) -> torch.Tensor | None:
+            return None if layer is None else layer(pooled)
+
+        logits = self.label_head(stacked_features(feats)) if labels and self.label_head is not None else None
+        return EncoderOutput(
+            self.head(pooled),
+            head(self.second_head),
+            logits,
+            head(self.log_var_head),
+            head(self.second_log_var_head),
+        )

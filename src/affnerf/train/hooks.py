@@ -28,7 +28,7 @@ from affnerf.train.validate import validate
 #: mask, depth or termination losses ``loss/mask``, ``loss/depth`` and ``loss/termination``; with the Lovász term the
 #: rays' ``loss/lovasz`` (unweighted, summed over the stages); the pose-aware model's
 #: ``loss/camera``; GSNeRF's ``loss/source_depth``; with two views' codes ``loss/view_consistency``; with AFF-NeRF's
-#: pixel-labelling head ``loss/view_affordance``; each weighted) and
+#: pixel-labelling head ``loss/view_affordance``; with variational codes ``loss/code_kl``; each weighted) and
 #: the learning rate it used (``train/lr``, a float; with 3D supervision the points' weight, ``train/points_weight``;
 #: with depth-guided sampling its share, ``train/surface_sample_share``).
 IterationOutputs = dict[str, torch.Tensor | float]
@@ -85,6 +85,7 @@ class LogScalars:
         "loss/source_depth",
         "loss/view_consistency",
         "loss/view_affordance",
+        "loss/code_kl",
     )
 
     #: The step's scheduled values (floats, the same on every rank): logged as they are, never averaged.
