@@ -172,3 +172,14 @@ def test_surface_samples_refuse_what_they_cannot_move(tiny_train_config, overrid
     model = {k: overrides.pop(k) for k in ("num_fine", "kind") if k in overrides}
     with pytest.raises(AffnerfError, match=message):
         train(replace(config, model=replace(config.model, **model), **overrides))
+
+
+def test_variational_codes_log_their_kl_and_resume_to_the_same_weights(tiny_train_config, tmp_path):
+    config = tiny_train_config(out=tmp_path / "kl", steps=6, log_every=1)
+    variational = replace(config.model, code_kl_weight=0.01)
+    train(replace(config, model=variational))
+    kls = [r["loss/code_kl"] for r in _metrics(config.out)]
+    assert len(kls) == 6 and all(k > 0 for k in kls)
+    straight = tiny_train_config(out=tmp_path / "straight")
+    a, b = straight_and_resumed_weights(replace(straight, model=replace(straight.model, code_kl_weight=0.01)), 10)
+    assert any("log_var_head" in k for k in a) and all(torch.equal(a[k], b[k]) for k in a)

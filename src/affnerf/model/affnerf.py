@@ -54,20 +54,24 @@ def gaussian_kl(mean: torch.Tensor, log_var: torch.Tensor) -> torch.Tensor:
     return 0.5 * (mean.square() + log_var.exp() - 1.0 - log_var).sum(dim=-1)
 
 
+#: Range the encoders' log-variances are clamped to before use, so a diverging head cannot blow a code up.
+LOG_VARIANCE_RANGE = (-12.0, 4.0)
+
+
 def sampled_codes(mean: torch.Tensor, log_var: torch.Tensor) -> torch.Tensor:
-    """(B, D) codes drawn from N(mean, exp(log_var)) by the reparameterisation trick (gradients reach both), the
-    log-variance clamped to [-12, 4] so a diverging head cannot blow the code up. Draws from torch's global
-    generator (saved in checkpoints)."""
-    return mean + torch.randn_like(mean) * (0.5 * log_var.clamp(-12.0, 4.0)).exp()
+    """(B, D) codes drawn from N(mean, exp(log_var)) by the reparameterisation trick (gradients reach both).
+    Draws from torch's global generator (saved in checkpoints)."""
+    return mean + torch.randn_like(mean) * (0.5 * log_var).exp()
 
 
 def variational_codes(
     codes: tuple[torch.Tensor, torch.Tensor], log_vars: tuple[torch.Tensor, torch.Tensor]
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """Shape and appearance means and log-variances, (B, D) each -> the two sampled codes (:func:`sampled_codes`)
-    and each object's KL summed over both codes, (B,)."""
-    kl = gaussian_kl(codes[0], log_vars[0].clamp(-12.0, 4.0)) + gaussian_kl(codes[1], log_vars[1].clamp(-12.0, 4.0))
-    return sampled_codes(codes[0], log_vars[0]), sampled_codes(codes[1], log_vars[1]), kl
+    and each object's KL summed over both codes, (B,); the log-variances clamped to :data:`LOG_VARIANCE_RANGE`."""
+    shape_var, appearance_var = (v.clamp(*LOG_VARIANCE_RANGE) for v in log_vars)
+    kl = gaussian_kl(codes[0], shape_var) + gaussian_kl(codes[1], appearance_var)
+    return sampled_codes(codes[0], shape_var), sampled_codes(codes[1], appearance_var), kl
 
 
 class AffNeRF(ConditionedNeRF):
