@@ -37,6 +37,9 @@ class OptimConfig:
             part of the model that fits its training objects better than new ones (benchmarks/results/
             code_oracle_shipped.md); the field, biases and normalisation scales never decay. 0 = plain Adam, the
             presets' (benchmarks/results/weight_decay.md).
+        encoder_lr_scale: the image encoders' learning rate is this times the schedule's (warm-up and decay
+            alike); the field keeps the schedule's own. Beyond the paper: the encoders are a convolutional network
+            and the field an MLP, and one rate need not suit both. 1 = one rate for all, the presets'.
     """
 
     lr: float = 5e-4
@@ -46,6 +49,7 @@ class OptimConfig:
     grad_clip: float = 0.0
     ema_decay: float = 0.0
     weight_decay: float = 0.0
+    encoder_lr_scale: float = 1.0
 
 
 @dataclass(frozen=True)

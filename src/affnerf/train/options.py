@@ -50,6 +50,13 @@ def check_options(config: TrainConfig) -> None:
             f"--optim.weight-decay decays the image encoders of {', '.join(ENCODER_KINDS)} models;"
             f" a {config.model.kind} model has none"
         )
+    if config.optim.encoder_lr_scale <= 0:
+        raise AffnerfError(f"--optim.encoder-lr-scale is positive, not {config.optim.encoder_lr_scale}")
+    if config.optim.encoder_lr_scale != 1.0 and config.model.kind not in ENCODER_KINDS:
+        raise AffnerfError(
+            f"--optim.encoder-lr-scale scales the image encoders of {', '.join(ENCODER_KINDS)} models;"
+            f" a {config.model.kind} model has none"
+        )
     shares = (config.foreground_fraction, config.outline_fraction)
     if min(shares) < 0 or sum(shares) > 1 or config.outline_radius < 0:
         raise AffnerfError(

@@ -35,29 +35,46 @@ from affnerf.train.sampler import PointSampler, RaySampler
 log = logging.getLogger(__name__)
 
 
-def decay_groups(model: torch.nn.Module, weight_decay: float) -> list[dict[str, Any]]:
-    """Adam's parameter groups for ``--optim.weight-decay``: the image encoders' convolution and linear weights
-    (parameters named ``*encoder*`` with two or more dimensions) decay by ``weight_decay``; everything else (the
-    field, biases, normalisation scales) does not. Returns ``[decayed, rest]``, either possibly empty."""
-    decayed, rest = [], []
+def decay_groups(model: torch.nn.Module, weight_decay: float, encoder_lr_scale: float = 1.0) -> list[dict[str, Any]]:
+    """Adam's parameter groups for ``--optim.weight-decay`` and ``--optim.encoder-lr-scale``: the image encoders'
+    convolution and linear weights (parameters named ``*encoder*`` with two or more dimensions) decay by
+    ``weight_decay``; nothing else (the field, biases, normalisation scales) does. Each group's ``lr_scale`` (read
+    by the trainer) is ``encoder_lr_scale`` for the encoders' parameters and 1 for the field's.
+
+    Returns ``[decayed, rest]`` with a scale of 1 (the layout of runs saved before the scale), else ``[decayed,
+    the encoders' rest, the field]``; any possibly empty."""
+    scaled = encoder_lr_scale != 1.0
+    decayed, encoder_rest, rest = [], [], []
     for name, param in model.named_parameters():
-        (decayed if "encoder" in name and param.ndim >= 2 else rest).append(param)
-    return [{"params": decayed, "weight_decay": weight_decay}, {"params": rest, "weight_decay": 0.0}]
+        in_encoder = "encoder" in name
+        if in_encoder and param.ndim >= 2:
+            decayed.append(param)
+        else:
+            (encoder_rest if in_encoder and scaled else rest).append(param)
+    groups = [{"params": decayed, "weight_decay": weight_decay, "lr_scale": encoder_lr_scale}]
+    if scaled:
+        groups.append({"params": encoder_rest, "weight_decay": 0.0, "lr_scale": encoder_lr_scale})
+    return [*groups, {"params": rest, "weight_decay": 0.0, "lr_scale": 1.0}]
 
 
 def make_optimizer(
-    model: torch.nn.Module, lr: float, device: torch.device, weight_decay: float = 0.0
+    model: torch.nn.Module, lr: float, device: torch.device, weight_decay: float = 0.0, encoder_lr_scale: float = 1.0
 ) -> torch.optim.Optimizer:
     """Adam over the model's parameters, fused on CPU and CUDA (one kernel over all parameters instead of a loop of
     small operations per parameter tensor; the same update within float rounding): on one CPU core the small
     preset's optimiser step takes about 5 ms instead of 18 (benchmarks/results/step_cost.md).
 
-    With ``weight_decay`` > 0 it is AdamW (decoupled decay, Loshchilov & Hutter 2019) on :func:`decay_groups`; at 0
-    it is plain Adam with one group, as checkpoints written before the option hold."""
+    With ``weight_decay`` > 0 it is AdamW (decoupled decay, Loshchilov & Hutter 2019) on :func:`decay_groups`;
+    with only ``encoder_lr_scale`` other than 1, Adam on those groups; with neither, plain Adam with one group, as
+    checkpoints written before these options hold."""
     fused = device.type in ("cpu", "cuda")
-    if weight_decay > 0:
-        return torch.optim.AdamW(decay_groups(model, weight_decay), lr=lr, fused=fused)
-    return torch.optim.Adam(model.parameters(), lr=lr, fused=fused)
+    if weight_decay <= 0 and encoder_lr_scale == 1.0:
+        return torch.optim.Adam(model.parameters(), lr=lr, fused=fused)
+    kind = torch.optim.AdamW if weight_decay > 0 else torch.optim.Adam
+    optimizer = kind(decay_groups(model, weight_decay, encoder_lr_scale), lr=lr, fused=fused)
+    for group in optimizer.param_groups:
+        group["lr"] = lr * group["lr_scale"]
+    return optimizer
 
 
 def initial_weights(source: Path, model: ConditionedNeRF, num_classes: int) -> Path:

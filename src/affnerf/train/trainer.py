@@ -223,7 +223,8 @@ class Trainer:
         config, ctx = self.config, self.ctx
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
-        optimizer = make_optimizer(model, config.optim.lr, ctx.device, config.optim.weight_decay)
+        optim = config.optim
+        optimizer = make_optimizer(model, optim.lr, ctx.device, optim.weight_decay, optim.encoder_lr_scale)
         sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world)
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
@@ -275,8 +276,8 @@ class Trainer:
         """
         config, state = self.config, self.state
         lr = learning_rate(config, step)
-        for group in state.optimizer.param_groups:
-            group["lr"] = lr
+        for group in state.optimizer.param_groups:  # the encoders' groups may scale it (--optim.encoder-lr-scale)
+            group["lr"] = lr * group.get("lr_scale", 1.0)
         batch = state.sampler.next_batch().to(self.ctx.device)
         if config.input_jitter > 0:
             images, intrinsics = jitter_crops(
