@@ -6,24 +6,12 @@ from dataclasses import replace
 
 import pytest
 import torch
+from support import TINY_MODEL
 
 from affnerf.errors import AffnerfError
 from affnerf.model.affnerf import AffNeRF, gaussian_kl, sampled_codes, variational_codes
-from affnerf.model.config import ModelConfig
 from affnerf.model.registry import build_model
 from affnerf.model.resnet import INITIAL_LOG_VARIANCE, CodeEncoder
-
-SMALL = ModelConfig(
-    encoder_width=0.125,
-    encoder_resolution=32,
-    field_width=32,
-    field_depth=4,
-    num_coarse=8,
-    num_fine=8,
-    clip_to_cube=True,
-    color_width=16,
-    affordance_width=16,
-)
 
 
 def test_gaussian_kl_matches_torch_distributions():
@@ -64,7 +52,7 @@ def test_only_a_variational_encoder_has_log_variance_heads():
 
 def test_training_draws_codes_and_adds_the_weighted_kl_while_evaluation_gives_the_means():
     torch.manual_seed(0)
-    model = AffNeRF(replace(SMALL, code_kl_weight=0.01), num_classes=3)
+    model = AffNeRF(replace(TINY_MODEL, code_kl_weight=0.01), num_classes=3)
     images = torch.rand(3, 3, 32, 32)
     model.eval()
     with torch.no_grad():
@@ -86,22 +74,22 @@ def test_training_draws_codes_and_adds_the_weighted_kl_while_evaluation_gives_th
 
 def test_views_of_one_object_average_their_kl():
     torch.manual_seed(0)
-    model = AffNeRF(replace(SMALL, code_kl_weight=0.01, encoders="one"), num_classes=3).train()
+    model = AffNeRF(replace(TINY_MODEL, code_kl_weight=0.01, encoders="one"), num_classes=3).train()
     codes = model.encode_views(torch.rand(2, 3, 3, 32, 32), torch.zeros(2, 3, 3, 3), torch.zeros(2, 3, 4, 4))
     assert codes.kl is not None and codes.kl.shape == (2,) and (codes.kl > 0).all()
 
 
 def test_a_model_without_the_weight_has_no_kl_and_no_extra_weights():
-    model = AffNeRF(SMALL, num_classes=3).train()
+    model = AffNeRF(TINY_MODEL, num_classes=3).train()
     assert model.encode(torch.rand(2, 3, 32, 32)).kl is None
     assert not any("log_var" in k for k in model.state_dict())
 
 
 def test_the_kl_weight_is_refused_for_other_models_and_below_zero():
     with pytest.raises(AffnerfError, match="--model.code-kl-weight"):
-        build_model(replace(SMALL, kind="pixelnerf", code_kl_weight=0.1), 3)
+        build_model(replace(TINY_MODEL, kind="pixelnerf", code_kl_weight=0.1), 3)
     with pytest.raises(AffnerfError, match="--model.code-kl-weight"):
-        build_model(replace(SMALL, code_kl_weight=-0.1), 3)
+        build_model(replace(TINY_MODEL, code_kl_weight=-0.1), 3)
 
 
 def test_variances_start_small_so_early_codes_are_not_drowned_in_noise():

@@ -11,10 +11,11 @@ from collections.abc import Mapping
 from affnerf.errors import AffnerfError
 from affnerf.train.config import TrainConfig
 
-#: model kinds with image encoders (parameters named ``*encoder*``) for ``--optim.weight-decay`` to decay.
+#: model kinds with image encoders (parameters named ``*encoder*``) for ``--optim.weight-decay`` to decay and
+#: ``--optim.encoder-lr-scale`` to scale.
 ENCODER_KINDS = ("affnerf", "pose-aware")
 
-__all__ = ["check_options", "check_surface_samples", "refuse_negative"]
+__all__ = ["check_optimiser", "check_options", "check_surface_samples", "refuse_negative"]
 
 
 def check_options(config: TrainConfig) -> None:
@@ -41,22 +42,7 @@ def check_options(config: TrainConfig) -> None:
         raise AffnerfError("--points-weight-final needs --points-weight > 0 (the weight the schedule starts from)")
     if config.model.view_affordance_weight > 0 and config.input_jitter > 0:
         raise AffnerfError("--model.view-affordance-weight needs --input-jitter 0 (the crops' labels are not jittered)")
-    if not 0.0 <= config.optim.ema_decay < 1.0:
-        raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
-    if config.optim.weight_decay < 0:
-        raise AffnerfError(f"--optim.weight-decay is 0 (none) or positive, not {config.optim.weight_decay}")
-    if config.optim.weight_decay > 0 and config.model.kind not in ENCODER_KINDS:
-        raise AffnerfError(
-            f"--optim.weight-decay decays the image encoders of {', '.join(ENCODER_KINDS)} models;"
-            f" a {config.model.kind} model has none"
-        )
-    if config.optim.encoder_lr_scale <= 0:
-        raise AffnerfError(f"--optim.encoder-lr-scale is positive, not {config.optim.encoder_lr_scale}")
-    if config.optim.encoder_lr_scale != 1.0 and config.model.kind not in ENCODER_KINDS:
-        raise AffnerfError(
-            f"--optim.encoder-lr-scale scales the image encoders of {', '.join(ENCODER_KINDS)} models;"
-            f" a {config.model.kind} model has none"
-        )
+    check_optimiser(config)
     shares = (config.foreground_fraction, config.outline_fraction)
     if min(shares) < 0 or sum(shares) > 1 or config.outline_radius < 0:
         raise AffnerfError(
@@ -83,6 +69,27 @@ def check_options(config: TrainConfig) -> None:
         "lovasz-weight": config.lovasz_weight,
     }
     refuse_negative(weights, "a weight (>= 0; 0 = off)")
+
+
+def check_optimiser(config: TrainConfig) -> None:
+    """Raise :class:`AffnerfError` with one line for an ``--optim.*`` value out of range, or one that acts on image
+    encoders in a model without them."""
+    if not 0.0 <= config.optim.ema_decay < 1.0:
+        raise AffnerfError(f"--optim.ema-decay is 0 (no average) or in (0, 1), not {config.optim.ema_decay}")
+    if config.optim.weight_decay < 0:
+        raise AffnerfError(f"--optim.weight-decay is 0 (none) or positive, not {config.optim.weight_decay}")
+    if config.optim.weight_decay > 0 and config.model.kind not in ENCODER_KINDS:
+        raise AffnerfError(
+            f"--optim.weight-decay decays the image encoders of {', '.join(ENCODER_KINDS)} models;"
+            f" a {config.model.kind} model has none"
+        )
+    if config.optim.encoder_lr_scale <= 0:
+        raise AffnerfError(f"--optim.encoder-lr-scale is positive, not {config.optim.encoder_lr_scale}")
+    if config.optim.encoder_lr_scale != 1.0 and config.model.kind not in ENCODER_KINDS:
+        raise AffnerfError(
+            f"--optim.encoder-lr-scale scales the image encoders of {', '.join(ENCODER_KINDS)} models;"
+            f" a {config.model.kind} model has none"
+        )
 
 
 def check_surface_samples(config: TrainConfig) -> None:
