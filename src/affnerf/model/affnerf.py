@@ -119,15 +119,16 @@ class AffNeRF(ConditionedNeRF):
         the codes with noise added (:func:`noisy_codes`); while training with ``code_kl_weight``, codes drawn from
         the encoders' Gaussians, with their KL (:func:`variational_codes`). Outside training, the means."""
         out = self.shape_encoder.encode_gaussian(images, labels=self.training)
-        shape, appearance, logits, log_vars = out.code, out.second, out.logits, (out.code_log_var, out.second_log_var)
+        shape, shape_var, logits = out.code, out.code_log_var, out.logits
+        appearance, appearance_var = out.second, out.second_log_var
         if self.appearance_encoder is not None:
             second = self.appearance_encoder.encode_gaussian(images, labels=False)
-            appearance, log_vars = second.code, (out.code_log_var, second.code_log_var)
+            appearance, appearance_var = second.code, second.code_log_var
         assert appearance is not None  # one encoder gives both codes
         kl = None
         if self.training and self.config.code_kl_weight > 0:
-            assert log_vars[0] is not None and log_vars[1] is not None  # the heads exist with the weight
-            shape, appearance, kl = variational_codes((shape, appearance), (log_vars[0], log_vars[1]))
+            assert shape_var is not None and appearance_var is not None  # the heads exist with the weight
+            shape, appearance, kl = variational_codes((shape, appearance), (shape_var, appearance_var))
         if self.training and self.config.code_noise > 0:
             shape, appearance = (
                 noisy_codes(shape, self.config.code_noise),
