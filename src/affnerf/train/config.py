@@ -96,6 +96,12 @@ class TrainConfig:
             the same object's whole views). 0 was behind the preset from scratch on two seeds (val40 mIoU −0.009 /
             −0.001, test64 −0.003 / −0.009; test cabinets, five of eight seen cut, −0.077 / −0.038): the model needs
             cut views in training to read cut ones at test time (benchmarks/results/cut_inputs.md).
+        mirror_fraction: chance that an object's encoded view is flipped left-right in a step, its rays and 3D points
+            mirrored across the vertical plane through the origin it is most nearly symmetric about, so the flip
+            shows the same object from another side, or its mirror image in its category's orientation
+            (:mod:`affnerf.train.mirror`; the flip augmentation of image networks, made exact for a model that
+            predicts in the object's frame). Beyond the paper; needs 3D supervision (the plane is found from the
+            point sets) and global codes. 0 = never (the draws as before).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
@@ -216,6 +222,7 @@ class TrainConfig:
     edge_fraction: float = 0.0
     edge_radius: int = 1
     cut_input_weight: float = 1.0
+    mirror_fraction: float = 0.0
     affordance_weight: float = 4e-4
     affordance_balance: float = 0.0
     mask_weight: float = 0.0

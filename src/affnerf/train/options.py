@@ -15,7 +15,7 @@ from affnerf.train.config import TrainConfig
 #: ``--optim.encoder-lr-scale`` to scale.
 ENCODER_KINDS = ("affnerf", "pose-aware")
 
-__all__ = ["check_optimiser", "check_options", "check_surface_samples", "refuse_negative"]
+__all__ = ["check_mirror", "check_optimiser", "check_options", "check_surface_samples", "refuse_negative"]
 
 
 def check_options(config: TrainConfig) -> None:
@@ -55,6 +55,7 @@ def check_options(config: TrainConfig) -> None:
             f"--edge-radius >= 0, not {config.edge_fraction} and {config.edge_radius}"
         )
     check_surface_samples(config)
+    check_mirror(config)
     if not 0 <= config.cut_input_weight <= 1:
         raise AffnerfError(f"--cut-input-weight is in [0, 1] (1 = every frame alike), not {config.cut_input_weight}")
     refuse_negative(
@@ -123,3 +124,16 @@ def refuse_negative(options: Mapping[str, float], meaning: str) -> None:
     for name, value in options.items():
         if value < 0:
             raise AffnerfError(f"--{name} is {meaning}, not {value}")
+
+
+def check_mirror(config: TrainConfig) -> None:
+    """Refuse ``--mirror-fraction`` outside [0, 1], without the 3D supervision points its planes are found from,
+    or for a model kind other than the global-code one (the posed baselines read the flipped views' cameras,
+    which only this model was checked without)."""
+    share = config.mirror_fraction
+    if not 0 <= share <= 1:
+        raise AffnerfError(f"--mirror-fraction is a chance in [0, 1], not {share}")
+    if share > 0 and config.points_weight <= 0:
+        raise AffnerfError("--mirror-fraction needs --points-weight > 0 (each object's plane comes from its points)")
+    if share > 0 and config.model.kind != "affnerf":
+        raise AffnerfError(f"--mirror-fraction needs global codes (--model.kind affnerf), not {config.model.kind!r}")

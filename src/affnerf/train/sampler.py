@@ -19,6 +19,7 @@ import torch
 from affnerf.data.crop import crop_outside, mark_outside, resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames, part_edge_index
+from affnerf.train.mirror import flipped_crop_intrinsics, mirrored_poses, reflection
 from affnerf.train.pixels import draw_edge_pixels, draw_pixels, input_view_chances, other_views
 from affnerf.train.points import PointSet
 
@@ -48,6 +49,8 @@ class RayBatch:
         encoder_view: (B, V) frame indices of each object's encoded views.
         ray_view: (R,) frame index each ray comes from.
         object_ids: the B objects' dataset ids.
+        reflect: (B, 3) signs by which each object's canonical frame is mirrored this step (all ones: not
+            mirrored; :mod:`affnerf.train.mirror`): its rays above already are, its 3D points are drawn so.
     """
 
     images: torch.Tensor
@@ -65,6 +68,7 @@ class RayBatch:
     encoder_view: torch.Tensor
     ray_view: torch.Tensor
     object_ids: list[str]
+    reflect: torch.Tensor
 
     def to(self, device: torch.device | str) -> RayBatch:
         """The batch with every tensor on ``device``."""
@@ -93,6 +97,10 @@ class RaySampler:
         cut_input_weight: how much a frame whose object touches the image border counts, against a whole one, in
             the choice of encoded views (:func:`input_view_chances`); 1 keeps the uniform choice and its draws.
         outside: the model's ``crop_outside``: ``checker`` marks where each encoded crop leaves its frame.
+        mirror_fraction: chance that an object's encoded views are flipped left-right this step and its rays
+            mirrored to match (:mod:`affnerf.train.mirror`); 0 keeps the draws as they were.
+        mirror_axes: each object's mirror axis (:func:`affnerf.train.mirror.mirror_axis`; -1 = never mirrored),
+            needed when ``mirror_fraction`` > 0.
     """
 
     def __init__(
@@ -111,6 +119,8 @@ class RaySampler:
         edge_radius: int = 0,
         cut_input_weight: float = 1.0,
         outside: str = "background",
+        mirror_fraction: float = 0.0,
+        mirror_axes: list[int] | None = None,
     ) -> None:
         if not objects:
             raise ValueError("no training objects")
@@ -122,6 +132,8 @@ class RaySampler:
             raise ValueError(f"the cut input views' weight is in [0, 1], not {cut_input_weight}")
         if not 0 <= edge_fraction <= foreground_fraction:
             raise ValueError(f"the part edges' share is in [0, {foreground_fraction}], not {edge_fraction}")
+        if not 0 <= mirror_fraction <= 1 or (mirror_fraction > 0 and len(mirror_axes or []) != len(objects)):
+            raise ValueError(f"the mirror chance is in [0, 1] with an axis for each object, not {mirror_fraction}")
         for o in objects:
             if len(o) < input_views + 1:
                 raise ValueError(
@@ -137,6 +149,7 @@ class RaySampler:
         self.edge_fraction, self.edge_radius = edge_fraction, edge_radius
         self._edges = [part_edge_index(np.asarray(o.labels)) for o in objects] if edge_fraction else []
         self.cut_input_weight, self.outside = cut_input_weight, outside
+        self.mirror_fraction, self.mirror_axes = mirror_fraction, list(mirror_axes or [-1] * len(objects))
         self._input_chances = (
             [input_view_chances(np.asarray(o.labels), cut_input_weight, input_views) for o in objects]
             if cut_input_weight < 1
@@ -148,9 +161,17 @@ class RaySampler:
         self._order = self._epoch_order(0)
 
     @classmethod
-    def for_config(cls, objects: list[ObjectFrames], config: TrainConfig, rank: int = 0, world: int = 1) -> RaySampler:
-        """The sampler of a training config: its objects, rays and ray shares a step, its seed, and its encoded
-        views (one more for the view-consistency loss's second view)."""
+    def for_config(
+        cls,
+        objects: list[ObjectFrames],
+        config: TrainConfig,
+        rank: int = 0,
+        world: int = 1,
+        mirror_axes: list[int] | None = None,
+    ) -> RaySampler:
+        """The sampler of a training config: its objects, rays and ray shares a step, its seed, its encoded
+        views (one more for the view-consistency loss's second view) and its mirror chance, with each object's
+        ``mirror_axes``."""
         views = config.input_views + (1 if config.view_consistency_weight > 0 else 0)
         return cls(
             objects,
@@ -167,6 +188,8 @@ class RaySampler:
             config.edge_radius,
             config.cut_input_weight,
             config.model.crop_outside,
+            config.mirror_fraction,
+            mirror_axes,
         )
 
     def _epoch_order(self, epoch: int) -> np.ndarray:
@@ -208,9 +231,14 @@ class RaySampler:
                 u, v = draw_edge_pixels(self.rng, edges, shape, views, on_edge, u, v, self.edge_radius)
             crop_depth, crop_labels = crop_maps(obj, enc)
             crops = encoder_crops(obj, enc, self.outside)
-            images.append((crops, obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels))
+            seen = (crops, obj.crop_intrinsics[enc], obj.poses[enc], crop_depth, crop_labels)
+            signs = np.ones(3)
+            if self.mirror_fraction and self.mirror_axes[oi] >= 0 and self.rng.random() < self.mirror_fraction:
+                signs = reflection(self.mirror_axes[oi])
+                seen = flipped_views(*seen, signs)
+            images.append(seen)
             enc_views.append(enc)
-            parts.append((slot, obj, views, u, v))
+            parts.append((slot, obj, views, u, v, signs))
         return _assemble(images, enc_views, parts, [self.objects[i].object_id for i in chosen])
 
     def state_dict(self) -> dict[str, Any]:
@@ -246,9 +274,31 @@ def crop_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return crops(obj.depth, np.float32), crops(obj.labels, np.uint8)
 
 
+def flipped_views(
+    crops: np.ndarray,
+    intrinsics: np.ndarray,
+    poses: np.ndarray,
+    depth: np.ndarray,
+    labels: np.ndarray,
+    signs: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """The encoded views of one object flipped left-right, as views of its mirror image across ``signs``
+    (:mod:`affnerf.train.mirror`): (V, S, S, 3) crops, (V, 4) crop intrinsics, (V, 4, 4) poses, (V, S, S) depth and
+    labels."""
+    size = crops.shape[2]
+    return (
+        np.ascontiguousarray(crops[:, :, ::-1]),
+        flipped_crop_intrinsics(intrinsics, size),
+        mirrored_poses(poses, signs),
+        np.ascontiguousarray(depth[:, :, ::-1]),
+        np.ascontiguousarray(labels[:, :, ::-1]),
+    )
+
+
 def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
     ray_object, pix, views, poses, intr, rgb, labels, depth, bg = [], [], [], [], [], [], [], [], []
-    for slot, obj, view, u, v in parts:
+    reflect = np.stack([p[5] for p in parts])
+    for slot, obj, view, u, v, _ in parts:
         n = len(view)
         ray_object.append(np.full(n, slot))
         pix.append(np.stack([u, v], 1))
@@ -264,6 +314,8 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         torch.from_numpy(np.concatenate(intr)),
         torch.from_numpy(np.concatenate(poses)),
     )
+    ray_signs = torch.from_numpy(reflect[np.concatenate(ray_object)])
+    origins, dirs = origins * ray_signs, dirs * ray_signs
     return RayBatch(
         images=torch.from_numpy(np.stack([i[0] for i in images])).permute(0, 1, 4, 2, 3).float() / 255.0,
         input_intrinsics=torch.from_numpy(np.stack([i[1] for i in images])).float(),
@@ -280,6 +332,7 @@ def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tupl
         encoder_view=torch.from_numpy(np.stack(enc_views)).long(),
         ray_view=torch.from_numpy(np.concatenate(views)).long(),
         object_ids=ids,
+        reflect=torch.from_numpy(reflect).float(),
     )
 
 
@@ -320,14 +373,16 @@ class PointSampler:
         self.point_sets, self.per_object = point_sets, per_object
         self.rng = np.random.default_rng([seed, rank, 41])
 
-    def draw(self, object_ids: list[str]) -> PointBatch:
-        """K points of each of the ray batch's objects, in its order."""
+    def draw(self, object_ids: list[str], reflect: np.ndarray | None = None) -> PointBatch:
+        """K points of each of the ray batch's objects, in its order, each object's mirrored by its (3,) signs
+        in the (B, 3) ``reflect`` (the ray batch's; :mod:`affnerf.train.mirror`)."""
         parts = []
         for slot, object_id in enumerate(object_ids):
             pts = self.point_sets[object_id]
             index = np.sort(self.rng.integers(0, len(pts), self.per_object))  # sorted: memory-map friendly
             slots = np.full(len(index), slot)
-            parts.append((pts.points[index], slots, pts.occupancy[index], pts.labels[index], pts.distance[index]))
+            xyz = pts.points[index] if reflect is None else pts.points[index] * reflect[slot].astype(np.float32)
+            parts.append((xyz, slots, pts.occupancy[index], pts.labels[index], pts.distance[index]))
         xyz, obj, occ, labels, distance = (np.concatenate(p) for p in zip(*parts, strict=True))
         return PointBatch(
             torch.from_numpy(xyz).float(),

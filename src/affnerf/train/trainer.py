@@ -47,6 +47,7 @@ from affnerf.train.loss import (
     point_loss,
     ray_geometry_loss,
 )
+from affnerf.train.mirror import mirror_axis
 from affnerf.train.options import check_options
 from affnerf.train.points import DISTANCE_TRUNCATION
 from affnerf.train.precision import forward_precision
@@ -196,12 +197,17 @@ class Trainer:
         resume_from = prepare_run_folder(config, ctx)
         dist_utils.barrier(ctx)
         frames = load_frames(config, self.dataset, ctx)
-        self.state = self._build_state(frames)
+        points = load_points(config, self.dataset, ctx) if config.points_weight > 0 else {}
+        axes = [mirror_axis(points[f.object_id]) for f in frames] if config.mirror_fraction > 0 else None
+        if axes is not None and ctx.is_main:
+            log.info(
+                "mirror planes: x = 0 for %d objects, y = 0 for %d, none for %d", *(axes.count(a) for a in (0, 1, -1))
+            )
+        self.state = self._build_state(frames, axes)
         if config.affordance_balance > 0:
             counts = label_counts(frames, len(self.dataset.affordance_classes))
             self.class_weight = class_weights(counts, config.affordance_balance).to(ctx.device)
-        if config.points_weight > 0:
-            points = load_points(config, self.dataset, ctx)
+        if points:
             self.state.points = PointSampler(points, config.points_per_object, config.seed, ctx.rank)
         if resume_from is not None:
             self.step = self.state.restore(resume_from, config, ctx, len(self.dataset.affordance_classes))
@@ -218,14 +224,15 @@ class Trainer:
         self.hooks = self._make_hooks()
         self.state.model.train()
 
-    def _build_state(self, frames: list[ObjectFrames]) -> TrainingState:
-        """The model (initialised from ``seed``), Adam, this rank's ray sampler and forward-pass generator."""
+    def _build_state(self, frames: list[ObjectFrames], mirror_axes: list[int] | None = None) -> TrainingState:
+        """The model (initialised from ``seed``), Adam, this rank's ray sampler (with each object's mirror axis
+        when ``mirror_fraction`` > 0) and forward-pass generator."""
         config, ctx = self.config, self.ctx
         torch.manual_seed(config.seed)
         model = build_model(config.model, len(self.dataset.affordance_classes)).to(ctx.device)
         optim = config.optim
         optimizer = make_optimizer(model, optim.lr, ctx.device, optim.weight_decay, optim.encoder_lr_scale)
-        sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world)
+        sampler = RaySampler.for_config(frames, config, ctx.rank, ctx.world, mirror_axes)
         generator = torch.Generator().manual_seed(config.seed * 1000 + ctx.rank)
         ema = WeightAverage(model, config.optim.ema_decay) if config.optim.ema_decay > 0 else None
         return TrainingState(model, optimizer, sampler, generator, ema=ema)
@@ -284,7 +291,9 @@ class Trainer:
                 batch.images, batch.input_intrinsics, object_backgrounds(batch), config.input_jitter, state.generator
             )
             batch = dataclasses.replace(batch, images=images, input_intrinsics=intrinsics)
-        points = None if state.points is None else state.points.draw(batch.object_ids).to(self.ctx.device)
+        points = None
+        if state.points is not None:
+            points = state.points.draw(batch.object_ids, batch.reflect.cpu().numpy()).to(self.ctx.device)
         mu = points_weight(config, step)
         share = surface_sample_share(config, step)
         with forward_precision(config.precision, self.ctx.device):
