@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Two `small` runs side by side, one core each, each with its own training options, then both calibrated (32
 # validation objects) and scored on val40 and, unless TEST64=0, on the 64 test objects, side by side.
-# - From scratch (no INIT) on the 13,000-step schedule whose seed-0 and seed-1 preset runs are part_edges.json's
-#   `preset_s0` / `preset_s1` (deterministic across the development VMs, so the preset need not be trained again).
-#   Results are gathered by collect_stages.py with those preset runs as references (see results/termination_scratch.md).
+# - From scratch (no INIT) on the 13,000-step schedule whose preset runs are preset_seeds.json's `pre_s0` / `pre_s1` /
+#   `pre_s2` and part_edges.json's `preset_s0` / `preset_s1`: five runs of the same command that spread by 0.02-0.04
+#   mIoU a split (results/preset_seeds.md), so read a pair against all of them, not one run a seed:
+#   collect_stages.py gathers the pair, rank_scratch.py ranks it against every committed screen and the preset runs.
 # - With INIT=WEIGHTS (a checkpoint, e.g. src/affnerf/weights/affnerf-small.pt): two further stages of those weights
 #   (a fresh Adam, 2e-4 -> 2e-5 over STEPS), gathered in W/stage_pair.json beside the shipped weights' rows
 #   (see results/lovasz_stage.md).
