@@ -128,8 +128,8 @@ def refuse_negative(options: Mapping[str, float], meaning: str) -> None:
 
 def check_mirror(config: TrainConfig) -> None:
     """Refuse ``--mirror-fraction`` outside [0, 1], without the 3D supervision points its planes are found from,
-    or for a model kind other than the global-code one (the posed baselines read the flipped views' cameras,
-    which only this model was checked without)."""
+    or for a model kind other than the global-code one (the posed baselines also read the flipped views' cameras
+    and pixels, a path no measurement or test covers)."""
     share = config.mirror_fraction
     if not 0 <= share <= 1:
         raise AffnerfError(f"--mirror-fraction is a chance in [0, 1], not {share}")
