@@ -101,7 +101,8 @@ class TrainConfig:
             shows the same object from another side, or its mirror image in its category's orientation
             (:mod:`affnerf.train.mirror`; the flip augmentation of image networks, made exact for a model that
             predicts in the object's frame). Beyond the paper; needs 3D supervision (the plane is found from the
-            point sets) and global codes. 0 = never (the draws as before).
+            point sets) and global codes. 0 = never (the draws as before). 0.5 from scratch on two seeds was level
+            with the preset's five runs on both splits (benchmarks/results/mirror_views.md).
         affordance_weight: lambda, the weight of the affordance cross-entropy (paper 4e-4; Semantic-NeRF 4e-2).
         affordance_balance: class balancing of the affordance cross-entropy: each class weighted by its pixel
             frequency in the training frames to the power -``affordance_balance`` (0 = plain CE, the paper; 0.5 =
