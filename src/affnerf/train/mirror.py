@@ -97,3 +97,24 @@ def flipped_crop_intrinsics(intrinsics: np.ndarray, size: int) -> np.ndarray:
     out = np.array(intrinsics, np.float64, copy=True)
     out[:, 2] = size - out[:, 2]
     return out
+
+
+def flipped_views(
+    crops: np.ndarray,
+    intrinsics: np.ndarray,
+    poses: np.ndarray,
+    depth: np.ndarray,
+    labels: np.ndarray,
+    signs: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """The encoded views of one object flipped left-right, as views of its mirror image across ``signs``
+    (:func:`reflection`): (V, S, S, 3) crops, (V, 4) crop intrinsics, (V, 4, 4) poses, (V, S, S) depth and
+    labels."""
+    size = crops.shape[2]
+    return (
+        np.ascontiguousarray(crops[:, :, ::-1]),
+        flipped_crop_intrinsics(intrinsics, size),
+        mirrored_poses(poses, signs),
+        np.ascontiguousarray(depth[:, :, ::-1]),
+        np.ascontiguousarray(labels[:, :, ::-1]),
+    )

@@ -19,7 +19,7 @@ import torch
 from affnerf.data.crop import crop_outside, mark_outside, resample_to_crop
 from affnerf.rendering.rays import pixel_rays
 from affnerf.train.cache import ObjectFrames, part_edge_index
-from affnerf.train.mirror import flipped_crop_intrinsics, mirrored_poses, reflection
+from affnerf.train.mirror import flipped_views, reflection
 from affnerf.train.pixels import draw_edge_pixels, draw_pixels, input_view_chances, other_views
 from affnerf.train.points import PointSet
 
@@ -272,27 +272,6 @@ def crop_maps(obj: ObjectFrames, enc: np.ndarray) -> tuple[np.ndarray, np.ndarra
         return np.stack(seen).astype(dtype) if seen else np.zeros((0, size, size), dtype)
 
     return crops(obj.depth, np.float32), crops(obj.labels, np.uint8)
-
-
-def flipped_views(
-    crops: np.ndarray,
-    intrinsics: np.ndarray,
-    poses: np.ndarray,
-    depth: np.ndarray,
-    labels: np.ndarray,
-    signs: np.ndarray,
-) -> tuple[np.ndarray, ...]:
-    """The encoded views of one object flipped left-right, as views of its mirror image across ``signs``
-    (:mod:`affnerf.train.mirror`): (V, S, S, 3) crops, (V, 4) crop intrinsics, (V, 4, 4) poses, (V, S, S) depth and
-    labels."""
-    size = crops.shape[2]
-    return (
-        np.ascontiguousarray(crops[:, :, ::-1]),
-        flipped_crop_intrinsics(intrinsics, size),
-        mirrored_poses(poses, signs),
-        np.ascontiguousarray(depth[:, :, ::-1]),
-        np.ascontiguousarray(labels[:, :, ::-1]),
-    )
 
 
 def _assemble(images: list[tuple], enc_views: list[np.ndarray], parts: list[tuple], ids: list[str]) -> RayBatch:
