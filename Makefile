@@ -21,8 +21,11 @@ $(STAMP): pyproject.toml $(LOCK)
 	$(BIN)/pip install --quiet -e ".[dev,segment]" $(CONSTRAINTS)
 	touch $(STAMP)
 
+# the tests run on a pytest-xdist worker per core, each on one thread (tests/conftest.py); TEST_WORKERS=0 runs them
+# in this one process
+TEST_WORKERS ?= auto
 test: install lint
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
 # ruff: lint and formatting (settings in pyproject.toml); `make format` rewrites files in place.
 lint: install

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -14,6 +15,16 @@ from affnerf.train.config import SMALL, OptimConfig, TrainConfig
 REPO_ROOT = Path(__file__).resolve().parents[1]
 #: Real PartNet-Mobility objects for development, beside the checkout (never copied into the repo).
 SHARED_PARTNET = REPO_ROOT.parent / "shared" / "data" / "partnet-mobility"
+
+
+def pytest_configure(config) -> None:
+    """Under pytest-xdist (``make test`` runs a worker per core) each worker, and every process it starts, computes
+    on one thread: the workers share the cores instead of fighting over them."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        import torch
+
+        torch.set_num_threads(1)
+        os.environ["OMP_NUM_THREADS"] = "1"
 
 
 @pytest.fixture
@@ -116,7 +127,7 @@ def trained_runs(train_dataset, tmp_path_factory) -> dict[str, Path]:
             val_every=0,
             progress=False,
             device="cpu",
-            cache_dir=root / f"cache-{kind}",
+            cache_dir=root / "cache",  # one frame and point cache for both (its entries are keyed by their settings)
             image_scale=1.0,
         )
         train(config)

@@ -159,11 +159,11 @@ def test_the_segmenter_method_uses_the_given_file_and_records_its_confidence(tra
 
 @pytest.fixture(scope="module")
 def rendered_objects(tmp_path_factory):
-    """Two bottles and two teapots (new draws, not the shipped segmenter's training objects), one 200x150 view."""
+    """A bottle and a teapot (new draws, not the shipped segmenter's training objects), one 200x150 view."""
     from affnerf.data.generate import GenerateConfig, generate_dataset
 
     root = tmp_path_factory.mktemp("photo") / "ds"
-    config = GenerateConfig(out=root, categories="bottle,teapot", objects_per_category=2, views=1, width=200,
+    config = GenerateConfig(out=root, categories="bottle,teapot", objects_per_category=1, views=1, width=200,
                             height=150, seed=3)  # fmt: skip
     generate_dataset(config, progress=False)
     return root
