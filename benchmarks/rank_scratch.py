@@ -4,9 +4,11 @@ Reads the committed results (`benchmarks/results/*.json` with a ``runs`` table, 
 keeps each run trained for 13,000 steps that was scored on both val40 and test64 (a run filed in several files
 counts once), and prints a Markdown table sorted by val40 + test64 mIoU, with the preset runs named by
 ``--preset FILE:RUN`` marked and their range given, so a candidate is read against the spread of the preset itself
-rather than against one run of it (results/preset_seeds.md).
+rather than against one run of it (results/preset_seeds.md). ``--also-steps N`` adds the runs of another step
+count, each labelled with it: a screen whose steps cost more, run for about the preset's time (the 11,000 steps of 16
+objects a step, results/objects_termination.md).
 
-    python benchmarks/rank_scratch.py --preset preset_seeds.json:pre_s0 ... [--out TABLE.md]
+    python benchmarks/rank_scratch.py --preset preset_seeds.json:pre_s0 ... [--also-steps 11000] [--out TABLE.md]
 """
 
 from __future__ import annotations
@@ -21,9 +23,9 @@ STEPS = 13_000
 COLUMNS = {"mIoU": "mIoU", "MPA": "MPA", "PSNR": "PSNR", "fscore_1cm": "F@1cm", "affordance_miou_3d": "3D aff. mIoU"}
 
 
-def scratch_runs(results: Path = RESULTS) -> dict[tuple[str, str], dict]:
-    """(file name, run name) -> run, for every 13,000-step run scored on val40 and test64, each run once (two
-    files holding the same scores, as a reference copied beside a screen, give the first file's name)."""
+def scratch_runs(results: Path = RESULTS, steps: frozenset[int] = frozenset({STEPS})) -> dict[tuple[str, str], dict]:
+    """(file name, run name) -> run, for every run of one of ``steps`` scored on val40 and test64, each run once
+    (two files holding the same scores, as a reference copied beside a screen, give the first file's name)."""
     found: dict[tuple[str, str], dict] = {}
     seen: set[tuple[float, float]] = set()
     for path in sorted(results.glob("*.json")):
@@ -32,7 +34,7 @@ def scratch_runs(results: Path = RESULTS) -> dict[tuple[str, str], dict]:
         if not isinstance(runs, dict):
             continue
         for name, run in runs.items():
-            if not isinstance(run, dict) or run.get("steps") != STEPS:
+            if not isinstance(run, dict) or run.get("steps") not in steps:
                 continue
             if not all(isinstance(run.get(split), dict) for split in ("val40", "test64")):
                 continue
@@ -61,7 +63,7 @@ def table(runs: dict[tuple[str, str], dict], presets: set[tuple[float, float]]) 
     for key, run in sorted(runs.items(), key=lambda item: -total(item[1])):
         digits = {c: 2 if c == "PSNR" else 3 for c in COLUMNS}
         cells = " | ".join(f"{run[s]['mean'][c]:.{digits[c]}f}" for c in COLUMNS for s in ("val40", "test64"))
-        label = f"{key[0]}: {key[1]}"
+        label = f"{key[0]}: {key[1]}" + ("" if run["steps"] == STEPS else f" ({run['steps']:,} steps)")
         label = f"**{label} (preset)**" if scores(run) in presets else label
         lines.append(f"| {label} | {cells} | {total(run):.3f} |")
     sums = [total(run) for run in runs.values() if scores(run) in presets]
@@ -75,6 +77,7 @@ def table(runs: dict[tuple[str, str], dict], presets: set[tuple[float, float]]) 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--preset", action="append", default=[], help="FILE:RUN of a preset run (repeatable)")
+    parser.add_argument("--also-steps", type=int, action="append", default=[], help="runs of this step count too")
     parser.add_argument("--out", type=Path, help="write the table here as well as printing it")
     args = parser.parse_args()
     presets = set()
@@ -84,7 +87,7 @@ def main() -> None:
         if not isinstance(run, dict) or run.get("steps") != STEPS:
             raise SystemExit(f"rank_scratch.py: {RESULTS / file}: no 13,000-step run {name!r}")
         presets.add(scores(run))
-    text = table(scratch_runs(), presets)
+    text = table(scratch_runs(steps=frozenset({STEPS, *args.also_steps})), presets)
     print(text)
     if args.out:
         args.out.write_text(text + "\n")
