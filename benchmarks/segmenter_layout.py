@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from PIL import Image
+from torch import nn
 
 from affnerf.environment import describe_machine
 from affnerf.model import segmenter as segnet
@@ -29,29 +29,29 @@ from affnerf.predict.shipped import shipped_segmenter
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites  # noqa: E402
 
-CHANNELS_LAST_PROBABILITY = segnet.object_probability
+
+class NCHWInput(nn.Module):
+    """A segmenter network fed its input in the default NCHW layout, whatever layout it is given (the shipped code
+    before 2026-12-07 fed NCHW; ``segnet.object_probability`` now hands the network a channels-last tensor)."""
+
+    def __init__(self, network: segnet.Segmenter) -> None:
+        super().__init__()
+        self.network, self.config = network, network.config
+
+    def forward(self, images: torch.Tensor) -> torch.Tensor:
+        return self.network(images.contiguous())
 
 
-@torch.no_grad()
-def nchw_probability(model: segnet.AnySegmenter, rgb: np.ndarray) -> np.ndarray:
-    """``segnet.object_probability`` with the input in the default NCHW layout (the shipped code before 2026-12-07)."""
-    if isinstance(model, segnet.SegmenterEnsemble):
-        return segnet.vote([nchw_probability(m, rgb) for m in model.members])
-    x, (w, h) = segnet.network_input(rgb, model.config)
-    prob = torch.sigmoid(model(x)[0, 0, :h, :w]).numpy().astype(np.float32)
-    full = Image.fromarray(prob, mode="F").resize((rgb.shape[1], rgb.shape[0]), Image.BILINEAR)
-    return np.clip(np.asarray(full, np.float32), 0.0, 1.0)
+def nchw_segmenter(model: segnet.AnySegmenter) -> segnet.SegmenterEnsemble:
+    """``model``'s networks, each behind :class:`NCHWInput`."""
+    return segnet.SegmenterEnsemble([NCHWInput(network) for network in segnet.networks(model)])
 
 
-def timed_map(model: segnet.AnySegmenter, rgb: np.ndarray, layout: str) -> tuple[np.ndarray, float]:
-    """(H, W) photo map of ``rgb`` with the input in ``layout`` (``nchw`` or ``channels_last``), and its seconds."""
-    segnet.object_probability = nchw_probability if layout == "nchw" else CHANNELS_LAST_PROBABILITY
-    try:
-        start = time.perf_counter()
-        prob = segnet.photo_probability(model, rgb)
-        return prob, time.perf_counter() - start
-    finally:
-        segnet.object_probability = CHANNELS_LAST_PROBABILITY
+def timed_map(model: segnet.AnySegmenter, rgb: np.ndarray) -> tuple[np.ndarray, float]:
+    """(H, W) photo map of ``rgb`` (``segnet.photo_probability``) and its seconds."""
+    start = time.perf_counter()
+    prob = segnet.photo_probability(model, rgb)
+    return prob, time.perf_counter() - start
 
 
 def main() -> None:
@@ -61,14 +61,15 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
-    model = segnet.load_segmenter(shipped_segmenter())
-    timed_map(model, np.zeros((300, 400, 3), np.uint8), "nchw")  # first-call set-up costs fall on neither row
+    shipped = segnet.load_segmenter(shipped_segmenter())
+    layouts = {"nchw": nchw_segmenter(shipped), "channels_last": shipped}
+    timed_map(layouts["nchw"], np.zeros((300, 400, 3), np.uint8))  # first-call set-up costs fall on neither row
     rows = []
     for k, item in enumerate(bench_composites(args.data, args.seed, args.composites)):
         order = ("nchw", "channels_last") if k % 2 == 0 else ("channels_last", "nchw")
         maps, secs = {}, {}
         for layout in order:
-            maps[layout], secs[layout] = timed_map(model, item.rgb, layout)
+            maps[layout], secs[layout] = timed_map(layouts[layout], item.rgb)
         rows.append({
             "seconds": secs,
             "max_abs_difference": float(np.abs(maps["nchw"] - maps["channels_last"]).max()),
