@@ -120,7 +120,9 @@ class TrainConfig:
             −0.094 (retrain_termination.md), though a second seed of the preset itself lands as low on test64
             (0.621, pens' caps lost too; retrain_seed1.md). On two full-budget seeds each it is ahead on val40
             (mean mIoU +0.011) and behind on the 64 test objects (−0.011, object mIoU −0.026;
-            retrain_termination_seed1.md); so not in the preset.
+            retrain_termination_seed1.md). With 16 objects a step, ahead of the preset at its time on three seeds
+            (objects_termination.md) and mixed again at full budget (val40 mIoU +0.006, test64 −0.006, object mIoU
+            −0.030; retrain_objects_termination.md); so not in the preset.
         lovasz_weight: weight of the Lovász-softmax loss (:func:`affnerf.train.loss.lovasz_softmax`, a surrogate of
             each class's intersection over union in the step's batch) relative to the cross-entropy it joins: the
             rendered rays' at ``affordance_weight`` times this, the 3D points' at their affordance weight times this
