@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,7 @@ from affnerf.predict.shipped import shipped_segmenter
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_composites import bench_composites  # noqa: E402
+from bench_segment import timed  # noqa: E402
 
 
 class NCHWInput(nn.Module):
@@ -47,13 +47,6 @@ def nchw_segmenter(model: segnet.AnySegmenter) -> segnet.SegmenterEnsemble:
     return segnet.SegmenterEnsemble([NCHWInput(network) for network in segnet.networks(model)])
 
 
-def timed_map(model: segnet.AnySegmenter, rgb: np.ndarray) -> tuple[np.ndarray, float]:
-    """(H, W) photo map of ``rgb`` (``segnet.photo_probability``) and its seconds."""
-    start = time.perf_counter()
-    prob = segnet.photo_probability(model, rgb)
-    return prob, time.perf_counter() - start
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, required=True)
@@ -63,13 +56,13 @@ def main() -> None:
     args = parser.parse_args()
     shipped = segnet.load_segmenter(shipped_segmenter())
     layouts = {"nchw": nchw_segmenter(shipped), "channels_last": shipped}
-    timed_map(layouts["nchw"], np.zeros((300, 400, 3), np.uint8))  # first-call set-up costs fall on neither row
+    segnet.photo_probability(layouts["nchw"], np.zeros((300, 400, 3), np.uint8))  # first-call set-up: in neither row
     rows = []
     for k, item in enumerate(bench_composites(args.data, args.seed, args.composites)):
         order = ("nchw", "channels_last") if k % 2 == 0 else ("channels_last", "nchw")
         maps, secs = {}, {}
         for layout in order:
-            maps[layout], secs[layout] = timed_map(layouts[layout], item.rgb)
+            maps[layout], secs[layout] = timed(segnet.photo_probability, layouts[layout], item.rgb)
         rows.append({
             "seconds": secs,
             "max_abs_difference": float(np.abs(maps["nchw"] - maps["channels_last"]).max()),
