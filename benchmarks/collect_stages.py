@@ -9,8 +9,16 @@ protocol on the 64 test objects (W/test64_NAME); a reference results file's runs
 written from those numbers, the shipped model's surface errors (results/surface_errors.json) as the first row of
 theirs. With ``--compact`` the file leaves out the confusion matrices and per-class IoUs and rounds to 5 decimals.
 
+``--stability NAME=SOURCE`` adds a run's view stability (``affnerf eval --stability-views``: the means of its
+predictions, the spread over input views, overall and per category) and ``--fresh NAME=SOURCE`` its scores on the
+192 fresh objects (``fresh_objects.sh``: mean and per category), as the run's ``stability`` and ``fresh192``. SOURCE
+is the folder that command wrote (its metrics.json), or ``FILE.json#key.key`` for an entry of a committed results
+file with the same fields (the shipped weights' scores, for instance). NAME must be one of the file's runs.
+
     .venv/bin/python benchmarks/collect_stages.py --work W --names a b --out benchmarks/results/X.json \
-        [--reference benchmarks/results/points_weight.json:0.1:plain] [--markdown TABLES.md]
+        [--reference benchmarks/results/points_weight.json:0.1:plain] [--markdown TABLES.md] \
+        [--stability a=W/stab_a --stability shipped=benchmarks/results/X.json#stability.runs.shipped] \
+        [--fresh a=W/fresh192_a --fresh shipped=benchmarks/results/validation_size.json#runs.shipped.fresh192]
 """
 
 from __future__ import annotations
@@ -54,6 +62,79 @@ def stage_scores(work: Path, name: str) -> dict:
         "surface_errors": None if surface is None else surface["summary"]["affnerf"],
         "grasp_val": _read(work / f"grasp_{name}" / "grasp_metrics.json"),
     }
+
+
+def _committed_entry(source: str) -> dict:
+    """The entry ``key.key`` of a results file named ``FILE.json#key.key``."""
+    file, _, keys = source.partition("#")
+    entry = json.loads(Path(file).read_text())
+    for key in keys.split("."):
+        if key not in entry:
+            raise SystemExit(f"collect_stages.py: {file} has no entry {keys!r} (no key {key!r})")
+        entry = entry[key]
+    return entry
+
+
+def _eval_metrics(source: str) -> dict:
+    """The metrics.json of the ``affnerf eval`` folder ``source``; a clear exit when it is not there."""
+    path = Path(source) / "metrics.json"
+    if not path.exists():
+        raise SystemExit(f"collect_stages.py: {path} is missing (the evaluation did not finish)")
+    return json.loads(path.read_text())
+
+
+def stability_scores(source: str) -> dict:
+    """A run's view stability from an ``affnerf eval --stability-views`` folder or a committed entry: ``mean`` (the
+    metrics over every input view's prediction), ``stability`` (mean mIoU and F@1cm spread over input views) and
+    ``stability_categories`` (the same per category)."""
+    if "#" in source:
+        return _committed_entry(source)
+    metrics = _eval_metrics(source)
+    if "stability" not in metrics:
+        raise SystemExit(f"collect_stages.py: {source}/metrics.json has no stability (run with --stability-views)")
+    return {
+        "mean": metrics["mean"],
+        "stability": metrics["stability"]["mean"],
+        "stability_categories": metrics["stability"]["categories"],
+    }
+
+
+def fresh_scores(source: str) -> dict:
+    """A run's scores on the fresh objects from a ``fresh_objects.sh`` folder or a committed entry: ``mean`` and
+    ``categories``."""
+    if "#" in source:
+        return _committed_entry(source)
+    metrics = _eval_metrics(source)
+    return {"mean": metrics["mean"], "categories": metrics["categories"]}
+
+
+def add_extra_scores(runs: dict, pairs: list[str], key: str, read) -> None:
+    """Store ``read(SOURCE)`` as ``runs[NAME][key]`` for each ``NAME=SOURCE`` of ``pairs``."""
+    for pair in pairs:
+        name, sep, source = pair.partition("=")
+        if not sep or name not in runs:
+            raise SystemExit(f"collect_stages.py: {pair!r} is not NAME=SOURCE with NAME one of {sorted(runs)}")
+        runs[name][key] = read(source)
+
+
+def stability_table(runs: dict) -> str:
+    """The view stability of every run scored there: the means over the predictions and the spreads."""
+    rows = [
+        [
+            name,
+            f"{r['stability']['mean']['mIoU']:.3f}",
+            f"{r['stability']['mean']['fscore_1cm']:.3f}",
+            f"{r['stability']['stability']['mIoU_spread']:.3f}",
+            f"{r['stability']['stability']['fscore_1cm_spread']:.3f}",
+            r["stability"]["stability"]["objects"],
+        ]
+        for name, r in runs.items()
+        if r.get("stability") is not None
+    ]
+    head = ["stage", "mIoU", "F@1cm", "mIoU spread", "F@1cm spread", "objects"]
+    return "View stability (each object from several input views; spread = max - min per object):\n\n" + _table(
+        head, rows
+    )
 
 
 CATEGORIES = ("bottle", "bucket", "cabinet", "eyeglasses", "pen", "scissors", "screwdriver", "teapot")
@@ -146,6 +227,8 @@ def main() -> None:
     parser.add_argument("--reference", action="append", default=[], help="FILE:RUN:NAME, a run of a results file")
     parser.add_argument("--markdown", type=Path, help="write the results page's tables here")
     parser.add_argument("--compact", action="store_true", help="no confusion matrices or per-class IoUs")
+    parser.add_argument("--stability", action="append", default=[], help="NAME=FOLDER or NAME=FILE.json#key.key")
+    parser.add_argument("--fresh", action="append", default=[], help="NAME=FOLDER or NAME=FILE.json#key.key")
     args = parser.parse_args()
     runs = {}
     for ref in args.reference:
@@ -154,12 +237,18 @@ def main() -> None:
     runs.update({name: stage_scores(args.work, name) for name in args.names})
     for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (a reference's own)
         run["test64"] = _eval_means(args.work / f"test64_{name}") or run.get("test64")
+    add_extra_scores(runs, args.stability, "stability", stability_scores)
+    add_extra_scores(runs, args.fresh, "fresh192", fresh_scores)
     args.out.write_text(json.dumps({"runs": compact(runs) if args.compact else runs}, indent=1) + "\n")
     if args.markdown:
         shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
         parts = [eval_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs)]
         if any(r.get("test64") for r in runs.values()):
             parts.append(eval_tables(runs, "test64"))
+        if args.fresh:
+            parts.append(eval_tables(runs, "fresh192"))
+        if args.stability:
+            parts.append(stability_table(runs))
         args.markdown.write_text("\n\n".join(parts) + "\n")
 
 
