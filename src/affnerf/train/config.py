@@ -144,7 +144,9 @@ class TrainConfig:
             codes render. Beyond the paper, so that one object predicted from different photos agrees with itself.
             Global-code models only (``--model.kind affnerf``), at least 2 objects a step.
         input_jitter: strength of the random colour, framing, blur and noise changes to the encoders' crops
-            (:mod:`affnerf.train.augment`; 0 = off, the paper; 1 = the documented ranges).
+            (:mod:`affnerf.train.augment`; 0 = off, the paper; 1 = the documented ranges). From scratch at the
+            shipped budget, 0.5 labels the inside of objects better and steadier over input views, but costs colour,
+            3D labels and mIoU on fresh objects, so the presets keep 0 (benchmarks/results/retrain_input_jitter.md).
         points_weight: weight of the 3D supervision from each training object's ``mesh.ply`` (0 = off, the
             paper's loss; conventions §4): occupancy BCE of both fields at ``points_per_object`` points per object,
             plus ``point_affordance_weight`` times their affordance cross-entropy.
