@@ -75,61 +75,48 @@ def _committed_entry(source: str) -> dict:
     return entry
 
 
-def _eval_metrics(source: str) -> dict:
-    """The metrics.json of the ``affnerf eval`` folder ``source``; a clear exit when it is not there."""
-    path = Path(source) / "metrics.json"
-    if not path.exists():
-        raise SystemExit(f"collect_stages.py: {path} is missing (the evaluation did not finish)")
-    return json.loads(path.read_text())
+def _eval_folder(source: str, read) -> dict:
+    """``read(folder)`` of the ``affnerf eval`` folder ``source``; a clear exit when its metrics.json is not there."""
+    scores = read(Path(source))
+    if scores is None:
+        raise SystemExit(f"collect_stages.py: {source}/metrics.json is missing (the evaluation did not finish)")
+    return scores
 
 
-def stability_scores(source: str) -> dict:
-    """A run's view stability from an ``affnerf eval --stability-views`` folder or a committed entry: ``mean`` (the
-    metrics over every input view's prediction), ``stability`` (mean mIoU and F@1cm spread over input views) and
-    ``stability_categories`` (the same per category)."""
-    if "#" in source:
-        return _committed_entry(source)
-    metrics = _eval_metrics(source)
+def _stability_means(folder: Path) -> dict | None:
+    """An ``affnerf eval --stability-views`` folder's ``mean`` (the metrics over every input view's prediction),
+    ``stability`` (mean mIoU and F@1cm spread over input views) and ``stability_categories`` (the same per
+    category), or None when it is not there."""
+    metrics = _read(folder / "metrics.json")
+    if metrics is None:
+        return None
     if "stability" not in metrics:
-        raise SystemExit(f"collect_stages.py: {source}/metrics.json has no stability (run with --stability-views)")
-    return {
-        "mean": metrics["mean"],
-        "stability": metrics["stability"]["mean"],
-        "stability_categories": metrics["stability"]["categories"],
-    }
-
-
-def fresh_scores(source: str) -> dict:
-    """A run's scores on the fresh objects from a ``fresh_objects.sh`` folder or a committed entry: ``mean`` and
-    ``categories``."""
-    if "#" in source:
-        return _committed_entry(source)
-    metrics = _eval_metrics(source)
-    return {"mean": metrics["mean"], "categories": metrics["categories"]}
+        raise SystemExit(f"collect_stages.py: {folder}/metrics.json has no stability (run with --stability-views)")
+    stability = metrics["stability"]
+    return {"mean": metrics["mean"], "stability": stability["mean"], "stability_categories": stability["categories"]}
 
 
 def add_extra_scores(runs: dict, pairs: list[str], key: str, read) -> None:
-    """Store ``read(SOURCE)`` as ``runs[NAME][key]`` for each ``NAME=SOURCE`` of ``pairs``."""
+    """Store a run's scores as ``runs[NAME][key]`` for each ``NAME=SOURCE`` of ``pairs``: ``read`` of the eval folder
+    SOURCE, or the committed entry SOURCE = ``FILE.json#key.key``."""
     for pair in pairs:
         name, sep, source = pair.partition("=")
         if not sep or name not in runs:
             raise SystemExit(f"collect_stages.py: {pair!r} is not NAME=SOURCE with NAME one of {sorted(runs)}")
-        runs[name][key] = read(source)
+        runs[name][key] = _committed_entry(source) if "#" in source else _eval_folder(source, read)
 
 
 def stability_table(runs: dict) -> str:
     """The view stability of every run scored there: the means over the predictions and the spreads."""
+    scored = {name: r["stability"] for name, r in runs.items() if r.get("stability") is not None}
     rows = [
         [
             name,
-            f"{r['stability']['mean']['mIoU']:.3f}",
-            f"{r['stability']['mean']['fscore_1cm']:.3f}",
-            f"{r['stability']['stability']['mIoU_spread']:.3f}",
-            f"{r['stability']['stability']['fscore_1cm_spread']:.3f}",
-            r["stability"]["stability"]["objects"],
+            *(f"{s['mean'][k]:.3f}" for k in ("mIoU", "fscore_1cm")),
+            *(f"{s['stability'][k]:.3f}" for k in ("mIoU_spread", "fscore_1cm_spread")),
+            s["stability"]["objects"],
         ]
-        for name, r in runs.items()
-        if r.get("stability") is not None
+        for name, s in scored.items()
     ]
     head = ["stage", "mIoU", "F@1cm", "mIoU spread", "F@1cm spread", "objects"]
     return "View stability (each object from several input views; spread = max - min per object):\n\n" + _table(
@@ -237,17 +224,17 @@ def main() -> None:
     runs.update({name: stage_scores(args.work, name) for name in args.names})
     for name, run in runs.items():  # val40's protocol on the 64 test objects, where it was run (a reference's own)
         run["test64"] = _eval_means(args.work / f"test64_{name}") or run.get("test64")
-    add_extra_scores(runs, args.stability, "stability", stability_scores)
-    add_extra_scores(runs, args.fresh, "fresh192", fresh_scores)
+    add_extra_scores(runs, args.stability, "stability", _stability_means)
+    add_extra_scores(runs, args.fresh, "fresh192", _eval_means)
     args.out.write_text(json.dumps({"runs": compact(runs) if args.compact else runs}, indent=1) + "\n")
     if args.markdown:
         shipped = json.loads((Path(__file__).parent / "results" / "surface_errors.json").read_text())
         parts = [eval_tables(runs), surface_table(runs, shipped["summary"]["affnerf"]), grasp_table(runs)]
         if any(r.get("test64") for r in runs.values()):
             parts.append(eval_tables(runs, "test64"))
-        if args.fresh:
+        if any(r.get("fresh192") for r in runs.values()):
             parts.append(eval_tables(runs, "fresh192"))
-        if args.stability:
+        if any(r.get("stability") for r in runs.values()):
             parts.append(stability_table(runs))
         args.markdown.write_text("\n\n".join(parts) + "\n")
 
